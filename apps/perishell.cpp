@@ -1,0 +1,144 @@
+// The perishell command-line app. Kokkos options (--kokkos-threads=N, --kokkos-device-id=N)
+// pass through to Kokkos.
+#include <perishell/cases/pressurised_membrane.hpp>
+#include <perishell/core/runtime.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace {
+
+constexpr const char* usage = R"(usage: perishell [--help] [--version] [--backend-info]
+       perishell membrane [options]
+
+Commands:
+  membrane        The stack-verification case (the default case until the shell solvers
+                  land): a square membrane with fixed edges under uniform tension and
+                  pressure, assembled and solved on the build's default device (atomic
+                  element assembly, Kokkos Kernels CRS matrix, Belos PCG). Compares the
+                  centre deflection with the exact series solution.
+      --cells N       quads per side, even (default 64)
+      --side A        side length a [m] (default 1)
+      --tension T     membrane tension T [N/m] (default 1000)
+      --pressure P    pressure p [Pa] (default 100)
+      --tolerance R   PCG relative residual tolerance (default 1e-10)
+      --max-error E   exit 1 when the relative error exceeds E (default 0.01)
+
+Options:
+  --help          this text
+  --version       the version
+  --backend-info  the Kokkos configuration and the devices in use
+  --kokkos-...    passed to Kokkos (e.g. --kokkos-threads=2, --kokkos-device-id=0)
+)";
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+double parseNumber(const std::string& option, const std::string& text) {
+  std::size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(value))
+    throw UsageError("option " + option + ": '" + text + "' is not a finite number");
+  return value;
+}
+
+int parseInteger(const std::string& option, const std::string& text) {
+  const double value = parseNumber(option, text);
+  if (value != std::floor(value) || std::abs(value) > 1e9)
+    throw UsageError("option " + option + ": '" + text + "' is not an integer");
+  return static_cast<int>(value);
+}
+
+int runMembrane(const std::vector<std::string>& args) {
+  perishell::cases::PressurisedMembraneOptions options;
+  double maxError = 0.01;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& option = args[i];
+    if (i + 1 >= args.size()) throw UsageError("option " + option + " needs a value");
+    const std::string& value = args[++i];
+    if (option == "--cells") options.cellsPerSide = parseInteger(option, value);
+    else if (option == "--side") options.side = parseNumber(option, value);
+    else if (option == "--tension") options.tension = parseNumber(option, value);
+    else if (option == "--pressure") options.pressure = parseNumber(option, value);
+    else if (option == "--tolerance") options.solver.tolerance = parseNumber(option, value);
+    else if (option == "--max-error") maxError = parseNumber(option, value);
+    else throw UsageError("unknown option '" + option + "' for 'membrane'");
+  }
+  if (!(options.side > 0.0)) throw UsageError("option --side: must be positive");
+
+  std::printf("perishell %s: pressurised square membrane on %s\n", perishell::versionString().c_str(),
+              perishell::ExecutionSpace::name());
+  std::printf("  a = %g m, T = %g N/m, p = %g Pa, %d x %d quads\n", options.side, options.tension,
+              options.pressure, options.cellsPerSide, options.cellsPerSide);
+  const auto start = std::chrono::steady_clock::now();
+  const auto result = perishell::cases::runPressurisedMembrane(perishell::ExecutionSpace{}, options);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  std::printf("\n  %-34s %s\n", "quantity", "value");
+  std::printf("  %-34s %d (%d constrained)\n", "nodes", result.numNodes, result.numConstrained);
+  std::printf("  %-34s %.12g m^2\n", "mesh area (sum of node areas)", result.meshArea);
+  std::printf("  %-34s %s in %d iterations (residual %.2e)\n", "Belos PCG (Jacobi)",
+              result.solve.converged ? "converged" : "NOT converged", result.solve.iterations,
+              result.solve.achievedTolerance);
+  std::printf("  %-34s %.9e m\n", "centre deflection", result.centreDeflection);
+  std::printf("  %-34s %.9e m\n", "exact (series) centre deflection", result.analyticCentreDeflection);
+  std::printf("  %-34s %.3e\n", "relative error", result.relativeError);
+  std::printf("  %-34s %.3f s\n", "wall time (setup + solve)", seconds);
+
+  if (!result.solve.converged) {
+    std::fprintf(stderr, "perishell: error: PCG did not converge\n");
+    return 1;
+  }
+  if (result.relativeError > maxError) {
+    std::fprintf(stderr, "perishell: error: relative error %.3e exceeds --max-error %.3e\n",
+                 result.relativeError, maxError);
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char* argv[]) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  if (args.empty() || args[0] == "--help" || args[0] == "-h") {
+    std::fputs(usage, args.empty() ? stderr : stdout);
+    return args.empty() ? 2 : 0;
+  }
+  if (args[0] == "--version") {
+    std::printf("perishell %s\n", perishell::versionString().c_str());
+    return 0;
+  }
+  Kokkos::ScopeGuard kokkos(argc, argv);  // strips the --kokkos-* arguments from argv
+  args.assign(argv + 1, argv + argc);
+  if (args.empty()) {
+    std::fputs(usage, stderr);
+    return 2;
+  }
+  try {
+    if (args[0] == "--backend-info") {
+      perishell::printBackendInfo(std::cout);
+      return 0;
+    }
+    if (args[0] == "membrane") return runMembrane({args.begin() + 1, args.end()});
+    throw UsageError("unknown command '" + args[0] + "'");
+  } catch (const UsageError& error) {
+    std::fprintf(stderr, "perishell: error: %s\n(see perishell --help)\n", error.what());
+    return 2;
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "perishell: error: %s\n", error.what());
+    return 1;
+  }
+}
