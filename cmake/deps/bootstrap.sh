@@ -98,8 +98,7 @@ fi
 kokkos_flags=(-DCMAKE_CXX_STANDARD=17 -DCMAKE_CXX_EXTENSIONS=OFF -DKokkos_ENABLE_TESTS=OFF
               -DKokkos_ENABLE_EXAMPLES=OFF -DKokkos_ENABLE_OPENMP=ON -DKokkos_ENABLE_SERIAL=OFF)
 if [ "$backend" = cuda ]; then
-  kokkos_flags+=(-DKokkos_ENABLE_CUDA=ON -DKokkos_ENABLE_CUDA_LAMBDA=ON
-                 -DKokkos_ENABLE_CUDA_CONSTEXPR=ON -DKokkos_ARCH_HOPPER90=ON)
+  kokkos_flags+=(-DKokkos_ENABLE_CUDA=ON -DKokkos_ENABLE_CUDA_LAMBDA=ON -DKokkos_ARCH_HOPPER90=ON)
 fi
 kokkoskernels_flags=(-DCMAKE_CXX_STANDARD=17 -DCMAKE_CXX_EXTENSIONS=OFF -DKokkosKernels_ADD_DEFAULT_ETI=OFF
                      -DKokkosKernels_ENABLE_TPL_CUSPARSE=OFF -DKokkosKernels_ENABLE_TPL_CUBLAS=OFF

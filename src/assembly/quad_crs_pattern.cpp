@@ -25,7 +25,7 @@ QuadCrsPattern<Kokkos::HostSpace> buildQuadCrsPattern(const mesh::HostQuadMesh& 
   for (LocalIndex row = 0; row < numNodes; ++row)
     std::copy(adjacency[row].begin(), adjacency[row].end(), pattern.columns.data() + pattern.rowMap(row));
 
-  pattern.valueSlot = Kokkos::View<RowOffset* [4][4], Kokkos::HostSpace>("crs element slots", numElements);
+  pattern.valueSlot = decltype(pattern.valueSlot)("crs element slots", numElements);
   for (LocalIndex e = 0; e < numElements; ++e)
     for (int a = 0; a < 4; ++a) {
       const LocalIndex row = mesh.quads(e, a);

@@ -11,7 +11,7 @@ struct QuadCrsPattern {
   Kokkos::View<RowOffset*, MemorySpaceT> rowMap;
   Kokkos::View<LocalIndex*, MemorySpaceT> columns;
   // valueSlot(e, a, b): index into the CRS values of K(quads(e, a), quads(e, b)).
-  Kokkos::View<RowOffset* [4][4], MemorySpaceT> valueSlot;
+  Kokkos::View<RowOffset* [4][4], Kokkos::LayoutRight, MemorySpaceT> valueSlot;
 
   LocalIndex numRows() const { return static_cast<LocalIndex>(rowMap.extent(0)) - 1; }
   RowOffset numEntries() const { return columns.extent(0); }

@@ -22,12 +22,14 @@ template <class MemorySpaceT>
 using VectorView = Kokkos::View<double*, MemorySpaceT>;
 template <class MemorySpaceT>
 using MultiVectorView = Kokkos::View<double**, Kokkos::LayoutLeft, MemorySpaceT>;
+// Small per-entity arrays are LayoutRight in every space (an entity's values are
+// contiguous, and host/device mirrors share one layout, so they copy without reordering).
 // Node coordinates: one row per node, x y z.
 template <class MemorySpaceT>
-using CoordinateView = Kokkos::View<double* [3], MemorySpaceT>;
+using CoordinateView = Kokkos::View<double* [3], Kokkos::LayoutRight, MemorySpaceT>;
 // Quad connectivity: one row per element, four node indices counter-clockwise.
 template <class MemorySpaceT>
-using QuadConnectivityView = Kokkos::View<LocalIndex* [4], MemorySpaceT>;
+using QuadConnectivityView = Kokkos::View<LocalIndex* [4], Kokkos::LayoutRight, MemorySpaceT>;
 
 template <class ExecutionSpaceT>
 inline constexpr bool is_execution_space_v = Kokkos::is_execution_space<ExecutionSpaceT>::value;
