@@ -1,9 +1,9 @@
 #pragma once
 // Conjugate gradients on a Kokkos Kernels CRS matrix through Belos' PseudoBlockCGSolMgr,
 // with the vectors living (and all vector work running) on the chosen execution space.
-#include "perishell/core/types.hpp"
-#include "perishell/solvers/belos/crs_operator.hpp"
-#include "perishell/solvers/belos/kokkos_multivector.hpp"
+#include <perishell/core/types.hpp>
+#include <perishell/solvers/belos/crs_operator.hpp>
+#include <perishell/solvers/belos/kokkos_multivector.hpp>
 
 #include <BelosLinearProblem.hpp>
 #include <BelosMultiVec.hpp>
@@ -40,11 +40,16 @@ struct CgResult {
 
 namespace detail {
 
-inline std::string trimmed(const std::string& text) {
-  const auto first = text.find_first_not_of(" \n");
-  if (first == std::string::npos) return {};
-  const auto last = text.find_last_not_of(" \n");
-  return text.substr(first, last - first + 1);
+// Teuchos exception texts span several lines (file, throw number, test, message).
+inline std::string oneLine(const std::string& text) {
+  std::string line;
+  for (const char c : text) {
+    const bool space = c == '\n' || c == ' ';
+    if (space && (line.empty() || line.back() == ' ')) continue;
+    line += space ? ' ' : c;
+  }
+  if (!line.empty() && line.back() == ' ') line.pop_back();
+  return line;
 }
 
 }  // namespace detail
@@ -76,6 +81,9 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
                                 std::to_string(options.maxIterations));
   }
   if (n == 0) return CgResult{true, 0, 0.0};
+  if (x.data() < b.data() + n && b.data() < x.data() + n) {
+    throw std::invalid_argument("perishell::belos::solveCg: x and b share storage");
+  }
 
   // Single-column LayoutLeft views over the caller's memory, so Belos updates x in place.
   // Belos only reads b (LinearProblem takes it as RCP<const MV>), so casting away const is safe.
@@ -87,23 +95,19 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
 
   const auto problem = Teuchos::rcp(new Belos::LinearProblem<double, MV, OP>(op, X, B));
   if (options.preconditioner == CgOptions::Preconditioner::Jacobi) {
-    // CGIter applies whichever preconditioner is set as M in z = M r; the convergence test
-    // uses the unpreconditioned residual either way. Left also gives setProblem() a
-    // preconditioned initial residual, which CG never reads, so right saves one apply.
+    // Belos' CG iterations apply whichever preconditioner is set as M in z = M r, and the
+    // default convergence test ("Norm of Initial Residual") uses unpreconditioned residuals
+    // either way. Left would also make setProblem() compute a preconditioned initial
+    // residual that this configuration never reads; right skips that apply.
     problem->setRightPrec(Teuchos::rcp(new JacobiPreconditioner<ExecutionSpaceT>(A)));
   }
   if (!problem->setProblem()) {
     throw std::logic_error("perishell::belos::solveCg: Belos::LinearProblem::setProblem() refused the system");
   }
 
-  // Belos prints its error report (with the failing iteration) to this stream; it goes
-  // into the exception text instead of std::cout.
-  const Teuchos::RCP<std::ostringstream> log = Teuchos::rcp(new std::ostringstream);
   const auto params = Teuchos::parameterList("perishell CG");
   params->set("Convergence Tolerance", options.tolerance);
   params->set("Maximum Iterations", options.maxIterations);
-  params->set("Verbosity", static_cast<int>(Belos::Errors));
-  params->set("Output Stream", Teuchos::RCP<std::ostream>(log));
 
   Belos::PseudoBlockCGSolMgr<double, MV, OP> solver(problem, params);
   Belos::ReturnType status = Belos::Unconverged;
@@ -112,16 +116,16 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
   } catch (const Belos::CGIterateFailure& e) {
     throw std::runtime_error(
         "perishell::belos::solveCg: CG broke down: the matrix or the preconditioner is not symmetric "
-        "positive definite (a non-positive curvature p^T A p or r^T M r appeared). Belos: " +
-        detail::trimmed(log->str().empty() ? e.what() : log->str()));
+        "positive definite (the step length r^T M r / p^T A p was not positive). Belos: " +
+        detail::oneLine(e.what()));
   } catch (const Belos::StatusTestError& e) {
     throw std::runtime_error(
         "perishell::belos::solveCg: CG broke down: the residual became NaN (NaN/Inf in A, b or x, "
         "or a singular system). Belos: " +
-        detail::trimmed(log->str().empty() ? e.what() : log->str()));
+        detail::oneLine(e.what()));
   } catch (const Belos::BelosError& e) {
     throw std::runtime_error("perishell::belos::solveCg: Belos CG failed: " +
-                             detail::trimmed(log->str().empty() ? e.what() : log->str()));
+                             detail::oneLine(e.what()));
   }
 
   // x2d aliases x, and CGIter writes the iterate straight into X; the fence makes the

@@ -1,8 +1,8 @@
 #pragma once
 // Belos::Operator<double> wrappers: a Kokkos Kernels CRS matrix (y = A x through
 // KokkosSparse::spmv) and the point-Jacobi preconditioner built from its diagonal.
-#include "perishell/core/types.hpp"
-#include "perishell/solvers/belos/kokkos_multivector.hpp"
+#include <perishell/core/types.hpp>
+#include <perishell/solvers/belos/kokkos_multivector.hpp>
 
 #include <BelosOperator.hpp>
 #include <BelosTypes.hpp>
@@ -27,20 +27,23 @@ using CrsMatrix = KokkosSparse::CrsMatrix<double, LocalIndex,
 
 namespace detail {
 
+[[noreturn]] inline void throwNotKokkos(const char* who) {
+  throw std::invalid_argument(std::string(who) +
+                              ": expects KokkosMultiVector arguments on the operator's execution space");
+}
+
 template <class ExecutionSpaceT>
 const KokkosMultiVector<ExecutionSpaceT>& asKokkos(const Belos::MultiVec<double>& mv, const char* who) {
   const auto* kokkos = dynamic_cast<const KokkosMultiVector<ExecutionSpaceT>*>(&mv);
-  if (kokkos == nullptr) {
-    throw std::invalid_argument(std::string(who) +
-                                ": expects KokkosMultiVector arguments on the operator's execution space");
-  }
+  if (kokkos == nullptr) throwNotKokkos(who);
   return *kokkos;
 }
 
 template <class ExecutionSpaceT>
 KokkosMultiVector<ExecutionSpaceT>& asKokkos(Belos::MultiVec<double>& mv, const char* who) {
-  return const_cast<KokkosMultiVector<ExecutionSpaceT>&>(
-      asKokkos<ExecutionSpaceT>(static_cast<const Belos::MultiVec<double>&>(mv), who));
+  auto* kokkos = dynamic_cast<KokkosMultiVector<ExecutionSpaceT>*>(&mv);
+  if (kokkos == nullptr) throwNotKokkos(who);
+  return *kokkos;
 }
 
 template <class ExecutionSpaceT>

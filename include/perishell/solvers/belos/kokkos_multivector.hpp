@@ -3,7 +3,7 @@
 // logic drives Kokkos / Kokkos Kernels kernels on any execution space. Belos 13.2 ships no
 // Kokkos adapter of its own; this one implements the run-time polymorphic interface in
 // BelosMultiVec.hpp, which Belos reaches through MultiVecTraits<double, MultiVec<double>>.
-#include "perishell/core/types.hpp"
+#include <perishell/core/types.hpp>
 
 #include <BelosMultiVec.hpp>
 #include <BelosTypes.hpp>
@@ -110,8 +110,8 @@ class KokkosMultiVector final : public Belos::MultiVec<double> {
 
   // ------------------------------------------------------------------ creation
   Belos::MultiVec<double>* Clone(const int numvecs) const override {
-    // Belos allows uninitialized contents; zero-filled storage keeps stray NaNs out of
-    // kernels such as gemm with beta = 0 applied to the whole column block.
+    // Belos allows uninitialized contents; the zero fill (one kernel) keeps fresh
+    // multivectors deterministic.
     return new KokkosMultiVector(view_.label(), GetGlobalLength(), numvecs);
   }
 
