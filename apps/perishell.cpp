@@ -28,6 +28,7 @@ Commands:
       --tension T     membrane tension T [N/m] (default 1000)
       --pressure P    pressure p [Pa] (default 100)
       --tolerance R   PCG relative residual tolerance (default 1e-10)
+      --max-iterations K  PCG iteration limit (default 20000)
       --max-error E   exit 1 when the relative error exceeds E (default 0.01)
 
 Options:
@@ -63,6 +64,7 @@ int parseInteger(const std::string& option, const std::string& text) {
 
 int runMembrane(const std::vector<std::string>& args) {
   perishell::cases::PressurisedMembraneOptions options;
+  options.solver.maxIterations = 20000;  // Jacobi-PCG needs O(cells) iterations on this problem
   double maxError = 0.01;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& option = args[i];
@@ -73,10 +75,13 @@ int runMembrane(const std::vector<std::string>& args) {
     else if (option == "--tension") options.tension = parseNumber(option, value);
     else if (option == "--pressure") options.pressure = parseNumber(option, value);
     else if (option == "--tolerance") options.solver.tolerance = parseNumber(option, value);
+    else if (option == "--max-iterations") options.solver.maxIterations = parseInteger(option, value);
     else if (option == "--max-error") maxError = parseNumber(option, value);
     else throw UsageError("unknown option '" + option + "' for 'membrane'");
   }
   if (!(options.side > 0.0)) throw UsageError("option --side: must be positive");
+  if (!(options.solver.tolerance > 0.0)) throw UsageError("option --tolerance: must be positive");
+  if (options.solver.maxIterations < 1) throw UsageError("option --max-iterations: must be at least 1");
 
   std::printf("perishell %s: pressurised square membrane on %s\n", perishell::versionString().c_str(),
               perishell::ExecutionSpace::name());
@@ -98,7 +103,8 @@ int runMembrane(const std::vector<std::string>& args) {
   std::printf("  %-34s %.3f s\n", "wall time (setup + solve)", seconds);
 
   if (!result.solve.converged) {
-    std::fprintf(stderr, "perishell: error: PCG did not converge\n");
+    std::fprintf(stderr, "perishell: error: PCG did not converge in %d iterations (raise --max-iterations)\n",
+                 result.solve.iterations);
     return 1;
   }
   if (result.relativeError > maxError) {

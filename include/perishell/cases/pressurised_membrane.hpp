@@ -73,7 +73,8 @@ PressurisedMembraneResult runPressurisedMembrane(const ExecutionSpaceT& space,
   result.numConstrained = static_cast<LocalIndex>(boundary.extent(0));
   Kokkos::View<bool*, Kokkos::HostSpace> hostConstrained("constrained", result.numNodes);
   for (LocalIndex i = 0; i < result.numConstrained; ++i) hostConstrained(boundary(i)) = true;
-  const auto isConstrained = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostConstrained);
+  Kokkos::View<bool*, MemorySpaceT> isConstrained("constrained", result.numNodes);
+  Kokkos::deep_copy(isConstrained, hostConstrained);
   assembly::eliminateHomogeneousDirichlet(space, pattern.rowMap, pattern.columns, values, rhs, isConstrained);
 
   const belos::CrsMatrix<ExecutionSpaceT> stiffness("membrane stiffness", result.numNodes, result.numNodes,

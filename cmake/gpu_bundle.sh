@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Packs a CUDA build for a GPU machine that lacks the build machine's packages: the test
+# binaries, the app and the benchmarks (stripped), the shared libraries they need beyond
+# glibc/libstdc++ and the NVIDIA driver, and run-tests.sh, which runs every test binary.
+# Usage: bash cmake/gpu_bundle.sh [BUILD_DIR (default build/cuda)] [OUT_DIR (default build/cuda-bundle)]
+set -euo pipefail
+build=${1:-build/cuda}
+out=${2:-build/cuda-bundle}
+[ -x "$build/apps/perishell" ] || { echo "gpu_bundle: no perishell app in $build; build the cuda preset first" >&2; exit 1; }
+rm -rf "$out"; mkdir -p "$out/bin" "$out/lib"
+binaries=("$build"/tests/*_test_* "$build/apps/perishell" "$build"/perf/perishell_perf_*)
+for b in "${binaries[@]}"; do
+  case "$b" in *.cmake) continue ;; esac
+  [ -x "$b" ] && strip -o "$out/bin/$(basename "$b")" "$b"
+done
+# Libraries a bare CUDA image may lack; the driver, glibc and the C++ runtime stay the host's.
+for b in "$out"/bin/*; do ldd "$b"; done | awk '$3 ~ /^\// {print $3}' | sort -u |
+  grep -E '/lib(cudart|blas|lapack|gfortran|quadmath|gomp)\.so' | while read -r lib; do cp -L "$lib" "$out/lib/"; done
+cat > "$out/run-tests.sh" <<'SCRIPT'
+#!/usr/bin/env bash
+# Runs every test binary of the bundle (CUDA and OpenMP categories); exit 1 if any fails.
+cd "$(dirname "$0")"
+export LD_LIBRARY_PATH="$PWD/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+failed=0
+for t in bin/*_test_*; do
+  echo "=== $t"
+  "$t" "$@" || { echo "FAILED: $t"; failed=1; }
+done
+exit $failed
+SCRIPT
+chmod +x "$out/run-tests.sh"
+du -sh "$out"
