@@ -2,11 +2,12 @@
 # Builds perishell's dependency stack from Debian's Trilinos 13.2 source package:
 #   Kokkos 3.4.01 (OpenMP, or CUDA + OpenMP host), Kokkos Kernels 3.4.01 (no ETI, no vendor TPLs),
 #   Teuchos + Belos 13.2 (host only, no MPI, no Kokkos inside Trilinos).
-# Installs go into a cache keyed by a hash of versions, patches, compilers and this script
-# (which holds every flag); a warm cache rebuilds nothing. Why this route: ../shared/docs/deps.md.
+# Installs go into a cache keyed by a hash of versions, patches, compilers and build flags;
+# a warm cache rebuilds nothing. Why this route: ../shared/docs/deps.md.
 #
 # Usage: cmake/deps/bootstrap.sh [--backend openmp|cuda] [--cache DIR] [--jobs N]
-#                                [--prefix-file FILE] [--no-apt]
+#                                [--prefix-file FILE] [--no-apt] [--patches DIR]
+#   --patches DIR: apply the patches in DIR instead of cmake/patches (they enter the cache key)
 # Environment: PERISHELL_CACHE (cache root, default $HOME/.cache/perishell),
 #              PERISHELL_TRILINOS_TARBALL (use this trilinos_13.2.0.orig.tar.gz, skip the download),
 #              CXX / CC (host compilers, default g++ / gcc), CUDA_HOME (default /usr/local/cuda).
@@ -24,7 +25,7 @@ readonly DEBIAN_PACKAGES=(cmake ninja-build g++ make patch ca-certificates dpkg-
                           libblas-dev liblapack-dev)
 
 script_dir=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
-patch_dir=$(cd "$script_dir/../patches" && pwd)
+patch_dir="$script_dir/../patches"
 
 backend=openmp
 cache=${PERISHELL_CACHE:-$HOME/.cache/perishell}
@@ -46,11 +47,14 @@ while [ $# -gt 0 ]; do
     --jobs) jobs=${2:?--jobs needs a value}; shift 2 ;;
     --prefix-file) prefix_file=${2:?--prefix-file needs a value}; shift 2 ;;
     --no-apt) use_apt=0; shift ;;
-    -h|--help) sed -n '2,13p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    --patches) patch_dir=${2:?--patches needs a value}; shift 2 ;;
+    -h|--help) sed -n '2,14p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) die "unknown argument '$1'" "run with --help for the usage" ;;
   esac
 done
 case "$backend" in openmp|cuda) ;; *) die "unknown backend '$backend'" "use --backend openmp or --backend cuda" ;; esac
+compgen -G "$patch_dir/*.patch" > /dev/null || die "no patches found in $patch_dir" "restore cmake/patches from the repository"
+patch_dir=$(cd "$patch_dir" && pwd)
 mkdir -p "$cache" || die "cannot create the cache directory $cache" "set PERISHELL_CACHE to a writable directory"
 cache=$(cd "$cache" && pwd)
 
@@ -199,12 +203,12 @@ extract_and_patch() {
   mapfile -t top_files < <(tar tzf "$tarball" | awk -F/ 'NF == 2 && $2 != ""')
   for part in "${TRILINOS_PARTS[@]}"; do parts+=("$TRILINOS_TOP/$part/*"); done
   tar xzf "$tarball" -C "$tmp" --strip-components=1 --wildcards "${top_files[@]}" "${parts[@]}" \
-      || die "extracting $tarball failed" "delete it and rerun"
+      || { rm -rf "$tmp"; die "extracting $tarball failed" "delete it and rerun"; }
   for p in "$patch_dir"/*.patch; do
     say "applying $(basename "$p")"
     (cd "$tmp" && patch -p1 --forward --batch --quiet < "$p" >&2) \
-      || die "patch $(basename "$p") failed to apply to Trilinos $TRILINOS_DEB_VERSION" \
-             "the patches in cmake/patches/ are written for Kokkos 3.4.01 from trilinos $TRILINOS_DEB_VERSION; check the tarball and the patch"
+      || { rm -rf "$tmp"; die "patch $(basename "$p") failed to apply to Trilinos $TRILINOS_DEB_VERSION" \
+             "the patches in cmake/patches/ are written for Kokkos 3.4.01 from trilinos $TRILINOS_DEB_VERSION; check the tarball and the patch"; }
   done
   touch "$tmp/.perishell-patched"
   mkdir -p "$(dirname "$src_dir")"
