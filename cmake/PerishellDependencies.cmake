@@ -4,6 +4,7 @@ find_package(Kokkos 3.4 REQUIRED)
 find_package(KokkosKernels REQUIRED)
 find_package(Belos REQUIRED)
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(HDF5 REQUIRED COMPONENTS C)
 
 if(PERISHELL_BACKEND STREQUAL "cuda")
   kokkos_check(DEVICES CUDA)

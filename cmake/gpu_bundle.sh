@@ -13,9 +13,11 @@ for b in "${binaries[@]}"; do
   case "$b" in *.cmake) continue ;; esac
   [ -x "$b" ] && strip -o "$out/bin/$(basename "$b")" "$b"
 done
-# Libraries a bare CUDA image may lack; the driver, glibc and the C++ runtime stay the host's.
+# Every shared library the binaries need (a bare CUDA image may lack BLAS, HDF5 and their
+# chains), except the driver, glibc and the C++ runtime, which stay the host's.
 for b in "$out"/bin/*; do ldd "$b"; done | awk '$3 ~ /^\// {print $3}' | sort -u |
-  grep -E '/lib(cudart|blas|lapack|gfortran|quadmath|gomp)\.so' | while read -r lib; do cp -L "$lib" "$out/lib/"; done
+  grep -vE '/(libc|libm|libdl|libpthread|librt|libresolv|ld-linux-x86-64|libstdc\+\+|libgcc_s|libcuda)\.so' |
+  while read -r lib; do cp -L "$lib" "$out/lib/"; done
 cat > "$out/run-tests.sh" <<'SCRIPT'
 #!/usr/bin/env bash
 # Runs every test binary of the bundle (CUDA and OpenMP categories); exit 1 if any fails.

@@ -1,0 +1,27 @@
+#pragma once
+// Atomic file replacement: the new contents go to "<path>.tmp.<pid>" in the same directory,
+// are fsync'ed, then rename(2) moves them over <path>. Rename within one file system is
+// atomic, so a reader (or a run killed mid-write) sees either the old file or the complete
+// new one, never a truncated file under the final name. Because the data are on disk before
+// the rename, a power loss keeps the old file or the new one as well; the directory itself
+// is not fsync'ed, so the rename may be lost, never half-applied.
+#include <functional>
+#include <string>
+
+namespace perishell::io {
+
+// "<path>.tmp.<pid>": unique per process, so two runs writing one directory do not collide.
+std::string temporaryPathFor(const std::string& path);
+
+// Calls writeTemporary(temporaryPath), which must create and close the complete file there
+// (any writer: HDF5, streams, ...), then fsyncs it and renames it over `path`. If
+// writeTemporary throws, or fsync/rename fail, the temporary is removed, `path` is left as
+// it was, and the exception propagates (OS failures as std::runtime_error naming the path
+// and the errno text).
+void replaceFileAtomically(const std::string& path,
+                           const std::function<void(const std::string& temporaryPath)>& writeTemporary);
+
+// Text (or any bytes) through replaceFileAtomically.
+void writeFileAtomically(const std::string& path, const std::string& contents);
+
+}  // namespace perishell::io

@@ -1,0 +1,77 @@
+#pragma once
+// Nodal results as an XDMF 3 time series that ParaView (XDMF3 reader) opens as one dataset
+// with a time slider. Host side: the caller passes host views; copies from the device are
+// the caller's, made at output steps only.
+//
+// Files, all in one directory (paths inside the .xmf are relative to it):
+//   <base>_mesh.h5    written once by the constructor: "/geometry" (nodes x 3, float64,
+//                     x y z in m) and "/topology" (elements x 4, int32, counter-clockwise);
+//   <base>_NNNNNN.h5  one per step (NNNNNN = step index from 0, six digits or more):
+//                     "/time" (1 value, float64, s) and "/fields/<name>" (float64; nodes
+//                     for a scalar, nodes x 3 for a vector);
+//   <base>.xmf        a Temporal collection with one Uniform grid per step, rewritten after
+//                     every step.
+// Every file is written atomically (atomic_file.hpp), the step's .h5 before the .xmf, so
+// the .xmf on disk only ever lists complete .h5 files. A step that fails validation
+// writes nothing; a step whose write fails leaves the previous .xmf as it was.
+// Files of an earlier run in the same directory are replaced as this run reaches them; its
+// .xmf lists only this run's steps from the first writeStep on.
+#include <perishell/core/types.hpp>
+#include <perishell/mesh/quad_mesh.hpp>
+
+#include <string>
+#include <vector>
+
+namespace perishell::io {
+
+using HostNodalValues = Kokkos::View<const double**, Kokkos::LayoutRight, Kokkos::HostSpace>;
+
+struct NodalField {
+  std::string name;        // letters, digits, '_', '-', '.'; starts with a letter, digit or '_'
+  int components;          // 1: Scalar, 3: Vector
+  HostNodalValues values;  // nodes x components
+};
+
+// Scalar fields from one value per node (a copy, made at output steps). Integer data
+// (flags, counts) are written as float64, which holds every int exactly.
+NodalField makeScalarField(std::string name, const Kokkos::View<const double*, Kokkos::HostSpace>& values);
+NodalField makeScalarField(std::string name, const Kokkos::View<const int*, Kokkos::HostSpace>& values);
+
+class XdmfTimeSeriesWriter {
+ public:
+  // The directory must exist. baseName follows the field-name rule. Throws
+  // std::invalid_argument on an empty mesh or connectivity outside the node range, and
+  // std::runtime_error (naming the path and the reason) if the mesh file cannot be written.
+  XdmfTimeSeriesWriter(std::string directory, std::string baseName, const mesh::HostQuadMesh& mesh);
+
+  // Throws std::invalid_argument, before writing anything, if time is not finite or
+  // decreases, or a field has an empty/ill-formed/repeated name, components other than 1
+  // or 3, or values whose extents are not nodes x components.
+  void writeStep(double time, const std::vector<NodalField>& fields);
+
+  int numSteps() const { return static_cast<int>(steps_.size()); }
+  std::string xdmfPath() const;
+  std::string meshPath() const;
+  std::string stepPath(int step) const;
+
+ private:
+  struct FieldRecord {
+    std::string name;
+    int components;
+  };
+  struct StepRecord {
+    double time;
+    std::vector<FieldRecord> fields;
+  };
+
+  std::string stepFileName(int step) const;
+  std::string xdmfText(const std::vector<StepRecord>& steps) const;
+
+  std::string directory_;
+  std::string baseName_;
+  LocalIndex numNodes_;
+  LocalIndex numElements_;
+  std::vector<StepRecord> steps_;
+};
+
+}  // namespace perishell::io

@@ -1,0 +1,55 @@
+#include <perishell/io/atomic_file.hpp>
+#include <perishell/io/csv_history.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <utility>
+
+namespace perishell::io {
+
+CsvHistory::CsvHistory(std::string path, std::vector<std::string> columnNames)
+    : path_(std::move(path)), columnNames_(std::move(columnNames)) {
+  if (path_.empty()) throw std::invalid_argument("CSV history: empty path");
+  if (columnNames_.empty()) throw std::invalid_argument("CSV history '" + path_ + "': no columns");
+  for (std::size_t column = 0; column < columnNames_.size(); ++column) {
+    const std::string& name = columnNames_[column];
+    if (name.empty() || name.find_first_of(",\"\r\n") != std::string::npos)
+      throw std::invalid_argument("CSV history '" + path_ + "': column " + std::to_string(column) +
+                                  " name '" + name +
+                                  "' must be non-empty and free of commas, quotes and line breaks");
+  }
+  flush();
+}
+
+void CsvHistory::append(std::vector<double> row) {
+  if (row.size() != columnNames_.size())
+    throw std::invalid_argument("CSV history '" + path_ + "': row " + std::to_string(rows_.size()) + " has " +
+                                std::to_string(row.size()) + " values, expected " +
+                                std::to_string(columnNames_.size()));
+  rows_.push_back(std::move(row));
+}
+
+void CsvHistory::flush() const {
+  std::string text;
+  for (std::size_t column = 0; column < columnNames_.size(); ++column)
+    text += (column == 0 ? "" : ",") + columnNames_[column];
+  text += '\n';
+  for (const auto& row : rows_) {
+    for (std::size_t column = 0; column < row.size(); ++column)
+      text += (column == 0 ? "" : ",") + formatCsvValue(row[column]);
+    text += '\n';
+  }
+  writeFileAtomically(path_, text);
+}
+
+std::string formatCsvValue(double value) {
+  // printf may print "-nan"; one spelling keeps the files diffable.
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0.0 ? "inf" : "-inf";
+  char buffer[32];  // %.17g needs at most 24 characters ("-1.2345678901234567e-308")
+  std::snprintf(buffer, sizeof buffer, "%.17g", value);
+  return buffer;
+}
+
+}  // namespace perishell::io

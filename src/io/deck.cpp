@@ -1,0 +1,932 @@
+// Case decks: Teuchos' YAML parser turns the text into a ParameterList; the schema below
+// (documented key by key in docs/deck.md) checks every key and fills the plain Deck struct.
+#include <perishell/io/deck.hpp>
+
+#include <Teuchos_ParameterList.hpp>
+#include <Teuchos_TwoDArray.hpp>
+#include <Teuchos_YamlParser_decl.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <regex>
+#include <sstream>
+#include <utility>
+
+namespace perishell {
+
+namespace {
+
+std::string composeMessage(const std::string& sourceName, const std::string& keyPath,
+                           const std::string& reason) {
+  return sourceName + ": " + (keyPath.empty() ? "" : keyPath + ": ") + reason;
+}
+
+}  // namespace
+
+DeckError::DeckError(const std::string& sourceName, const std::string& keyPath,
+                     const std::string& reason, int line)
+    : std::runtime_error(composeMessage(sourceName, keyPath, reason)),
+      sourceName_(sourceName),
+      keyPath_(keyPath),
+      reason_(reason),
+      line_(line) {}
+
+namespace deck {
+
+double evaluateCurve(const Curve& curve, double time) {
+  switch (curve.type) {
+    case CurveType::Ramp:
+      return std::clamp(time / curve.endTime, 0.0, 1.0);
+    case CurveType::Step:
+      return time < curve.stepTime ? 0.0 : 1.0;
+    case CurveType::Table: {
+      if (time <= curve.times.front()) return curve.values.front();
+      if (time >= curve.times.back()) return curve.values.back();
+      const auto upper = std::upper_bound(curve.times.begin(), curve.times.end(), time);
+      const auto i = std::size_t(upper - curve.times.begin());
+      const double weight = (time - curve.times[i - 1]) / (curve.times[i] - curve.times[i - 1]);
+      return curve.values[i - 1] + weight * (curve.values[i] - curve.values[i - 1]);
+    }
+  }
+  return 0.0;
+}
+
+}  // namespace deck
+
+const deck::Curve* Deck::findCurve(const std::string& name) const {
+  for (const auto& curve : curves)
+    if (curve.name == name) return &curve;
+  return nullptr;
+}
+
+namespace {
+
+using Teuchos::ParameterEntry;
+using Teuchos::ParameterList;
+using deck::Vector3;
+
+constexpr const char* rootKey = "perishell";
+
+std::string formatNumber(double value) {
+  std::ostringstream out;
+  out << std::setprecision(6) << value;
+  return out.str();
+}
+
+std::string joinWords(const std::vector<std::string>& words) {
+  std::string joined;
+  for (const auto& word : words) joined += (joined.empty() ? "" : ", ") + word;
+  return joined;
+}
+
+std::string joinPath(const std::string& parent, const std::string& key) {
+  return parent.empty() ? key : parent + "." + key;
+}
+
+std::string lowerCase(std::string text) {
+  for (auto& c : text) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+template <class T>
+bool holds(const ParameterEntry& entry) {
+  return !entry.isList() && entry.getAny(false).type() == typeid(T);
+}
+
+template <class T>
+const T& valueOf(const ParameterEntry& entry) {
+  return Teuchos::any_cast<T>(entry.getAny(false));
+}
+
+// Teuchos stores what its own number syntax cannot hold (nan, .inf, 1e400) as a string.
+bool spellsNonFiniteNumber(const std::string& text) {
+  std::string word = lowerCase(text);
+  if (!word.empty() && (word[0] == '+' || word[0] == '-')) word.erase(0, 1);
+  if (word == "nan" || word == ".nan" || word == "inf" || word == ".inf" || word == "infinity")
+    return true;
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  return !text.empty() && end == text.c_str() + text.size() && !std::isfinite(value);
+}
+
+// What a value is, for "expected X, got Y" messages.
+std::string describe(const ParameterEntry& entry) {
+  if (entry.isList())
+    return valueOf<ParameterList>(entry).numParams() == 0 ? "an empty value" : "a map";
+  if (holds<std::string>(entry)) return "the string '" + valueOf<std::string>(entry) + "'";
+  if (holds<bool>(entry)) return valueOf<bool>(entry) ? "true" : "false";
+  if (holds<int>(entry)) return "the number " + std::to_string(valueOf<int>(entry));
+  if (holds<long long>(entry)) return "the number " + std::to_string(valueOf<long long>(entry));
+  if (holds<double>(entry)) return "the number " + formatNumber(valueOf<double>(entry));
+  if (entry.isArray()) return "a list";
+  if (entry.isTwoDArray()) return "a nested list";
+  return "a value of another type";
+}
+
+// One map of the deck, with its key path for messages.
+class Section {
+ public:
+  Section(const ParameterList& list, std::string path, const std::string& source)
+      : list_(&list), path_(std::move(path)), source_(&source) {}
+
+  std::string pathOf(const std::string& key) const { return joinPath(path_, key); }
+
+  [[noreturn]] void fail(const std::string& key, const std::string& reason) const {
+    throw DeckError(*source_, key.empty() ? path_ : pathOf(key), reason);
+  }
+
+  // Unknown keys are errors everywhere, so that a typo never silently falls back to a default.
+  void allowOnly(const std::vector<std::string>& allowed, const std::string& context = "") const {
+    for (auto it = list_->begin(); it != list_->end(); ++it) {
+      const std::string& key = list_->name(it);
+      if (std::find(allowed.begin(), allowed.end(), key) == allowed.end())
+        fail(key, (context.empty() ? "unknown key" : "key not allowed " + context) +
+                      "; allowed keys here: " + joinWords(allowed));
+    }
+  }
+
+  bool has(const std::string& key) const { return list_->isParameter(key); }
+
+  std::vector<std::string> keys() const {
+    std::vector<std::string> names;
+    for (auto it = list_->begin(); it != list_->end(); ++it) names.push_back(list_->name(it));
+    return names;
+  }
+
+  const ParameterEntry& entry(const std::string& key) const {
+    if (!has(key)) fail(key, "missing required key");
+    return list_->getEntry(key);
+  }
+
+  double number(const std::string& key) const { return toNumber(entry(key), pathOf(key)); }
+  double number(const std::string& key, double fallback) const {
+    return has(key) ? number(key) : fallback;
+  }
+  std::optional<double> optionalNumber(const std::string& key) const {
+    return has(key) ? std::optional<double>(number(key)) : std::nullopt;
+  }
+
+  // Counts; an integral double (5e4) is accepted.
+  long long integer(const std::string& key) const {
+    const ParameterEntry& value = entry(key);
+    if (holds<int>(value)) return valueOf<int>(value);
+    if (holds<long long>(value)) return valueOf<long long>(value);
+    if (holds<double>(value)) {
+      const double real = valueOf<double>(value);
+      if (std::isfinite(real) && real == std::floor(real) && std::fabs(real) < 9.0e15)
+        return static_cast<long long>(real);
+    }
+    fail(key, "expected a whole number, got " + describe(value));
+  }
+  long long integer(const std::string& key, long long fallback) const {
+    return has(key) ? integer(key) : fallback;
+  }
+
+  std::string text(const std::string& key) const {
+    const ParameterEntry& value = entry(key);
+    if (!holds<std::string>(value)) fail(key, "expected a string, got " + describe(value));
+    const auto& result = valueOf<std::string>(value);
+    if (result.empty()) fail(key, "must not be empty");
+    return result;
+  }
+  std::string text(const std::string& key, const std::string& fallback) const {
+    return has(key) ? text(key) : fallback;
+  }
+
+  bool flag(const std::string& key, bool fallback) const {
+    if (!has(key)) return fallback;
+    const ParameterEntry& value = entry(key);
+    if (!holds<bool>(value)) fail(key, "expected true or false, got " + describe(value));
+    return valueOf<bool>(value);
+  }
+
+  std::vector<double> numbers(const std::string& key) const {
+    return toNumbers(entry(key), pathOf(key));
+  }
+
+  Vector3 vector3(const std::string& key) const { return toVector3(entry(key), pathOf(key)); }
+
+  // A list of words; a single word is a list of one.
+  std::vector<std::string> words(const std::string& key) const {
+    const ParameterEntry& value = entry(key);
+    if (holds<std::string>(value)) return {valueOf<std::string>(value)};
+    if (holds<Teuchos::Array<std::string>>(value)) {
+      const auto& array = valueOf<Teuchos::Array<std::string>>(value);
+      return std::vector<std::string>(array.begin(), array.end());
+    }
+    fail(key, "expected a list of names, got " + describe(value));
+  }
+
+  template <class Enum>
+  Enum choice(const std::string& key, const std::vector<std::pair<std::string, Enum>>& options) const {
+    return choose(text(key), key, options);
+  }
+  template <class Enum>
+  Enum choice(const std::string& key, const std::vector<std::pair<std::string, Enum>>& options,
+              Enum fallback) const {
+    return has(key) ? choice(key, options) : fallback;
+  }
+  template <class Enum>
+  Enum choose(const std::string& word, const std::string& key,
+              const std::vector<std::pair<std::string, Enum>>& options) const {
+    std::vector<std::string> names;
+    for (const auto& [name, value] : options) {
+      if (name == word) return value;
+      names.push_back(name);
+    }
+    fail(key, "'" + word + "' is not one of " + joinWords(names));
+  }
+
+  Section sublist(const std::string& key) const {
+    const ParameterEntry& value = entry(key);
+    if (!value.isList()) fail(key, "expected a map (indented keys below it), got " + describe(value));
+    return Section(valueOf<ParameterList>(value), pathOf(key), *source_);
+  }
+  // An optional map; absent reads as empty.
+  Section sublistOrEmpty(const std::string& key) const {
+    static const ParameterList empty;
+    return has(key) ? sublist(key) : Section(empty, pathOf(key), *source_);
+  }
+  // Repeated items are named maps (Teuchos holds no lists of maps): every key here is one item.
+  std::vector<std::pair<std::string, Section>> namedItems() const {
+    std::vector<std::pair<std::string, Section>> items;
+    for (const auto& key : keys()) items.emplace_back(key, sublist(key));
+    return items;
+  }
+
+  double toNumber(const ParameterEntry& value, const std::string& path) const {
+    double result = 0.0;
+    if (holds<double>(value))
+      result = valueOf<double>(value);
+    else if (holds<int>(value))
+      result = valueOf<int>(value);
+    else if (holds<long long>(value))
+      result = double(valueOf<long long>(value));
+    else if (holds<std::string>(value) && spellsNonFiniteNumber(valueOf<std::string>(value)))
+      throw DeckError(*source_, path, "not a finite number ('" + valueOf<std::string>(value) + "')");
+    else
+      throw DeckError(*source_, path, "expected a number, got " + describe(value));
+    if (!std::isfinite(result))
+      throw DeckError(*source_, path, "not a finite number (" + formatNumber(result) + ")");
+    return result;
+  }
+
+  std::vector<double> toNumbers(const ParameterEntry& value, const std::string& path) const {
+    std::vector<double> result;
+    if (holds<Teuchos::Array<double>>(value)) {
+      for (double x : valueOf<Teuchos::Array<double>>(value)) result.push_back(x);
+    } else if (holds<Teuchos::Array<int>>(value)) {
+      for (int x : valueOf<Teuchos::Array<int>>(value)) result.push_back(x);
+    } else if (holds<Teuchos::Array<long long>>(value)) {
+      for (long long x : valueOf<Teuchos::Array<long long>>(value)) result.push_back(double(x));
+    } else if (holds<Teuchos::Array<std::string>>(value)) {
+      // One non-number turns the whole list into strings: name the culprit.
+      const auto& array = valueOf<Teuchos::Array<std::string>>(value);
+      for (Teuchos::Ordinal i = 0; i < array.size(); ++i) {
+        const std::string itemPath = path + "[" + std::to_string(i) + "]";
+        char* end = nullptr;
+        const double x = std::strtod(array[i].c_str(), &end);
+        if (spellsNonFiniteNumber(array[i]))
+          throw DeckError(*source_, itemPath, "not a finite number ('" + array[i] + "')");
+        if (array[i].empty() || end != array[i].c_str() + array[i].size())
+          throw DeckError(*source_, itemPath, "expected a number, got the string '" + array[i] + "'");
+        result.push_back(x);
+      }
+    } else {
+      throw DeckError(*source_, path, "expected a list of numbers like [1, 2.5], got " + describe(value));
+    }
+    return result;
+  }
+
+  Vector3 toVector3(const ParameterEntry& value, const std::string& path) const {
+    const auto components = toNumbers(value, path);
+    if (components.size() != 3)
+      throw DeckError(*source_, path, "expected 3 numbers [x, y, z], got " +
+                                          std::to_string(components.size()));
+    return {components[0], components[1], components[2]};
+  }
+
+ private:
+  const ParameterList* list_;
+  std::string path_;
+  const std::string* source_;
+};
+
+double norm(const Vector3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+Vector3 cross(const Vector3& a, const Vector3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+void requirePositive(const Section& section, const std::string& key, double value) {
+  if (!(value > 0.0)) section.fail(key, "must be positive, got " + formatNumber(value));
+}
+
+std::string resolveAgainst(const std::filesystem::path& baseDirectory, const std::string& path) {
+  const std::filesystem::path relative(path);
+  if (relative.is_absolute() || baseDirectory.empty()) return path;
+  return (baseDirectory / relative).lexically_normal().string();
+}
+
+// ---------------------------------------------------------------- sections
+
+deck::Mesh readMesh(const Section& section, const std::filesystem::path& baseDirectory) {
+  using deck::MeshGenerator;
+  const std::vector<std::string> common{"generator", "spacing", "pre-cracks", "node-sets"};
+  const std::vector<std::pair<std::string, std::vector<std::string>>> generatorKeys{
+      {"plate", {"length-x", "length-y"}},
+      {"cylinder", {"radius", "height"}},
+      {"hexagonal-prism", {"side", "length"}},
+      {"gmsh", {"file"}}};
+  std::vector<std::string> allKeys = common;
+  for (const auto& [name, keys] : generatorKeys) allKeys.insert(allKeys.end(), keys.begin(), keys.end());
+  section.allowOnly(allKeys);
+
+  deck::Mesh mesh;
+  mesh.generator = section.choice<MeshGenerator>(
+      "generator", {{"plate", MeshGenerator::Plate},
+                    {"cylinder", MeshGenerator::Cylinder},
+                    {"hexagonal-prism", MeshGenerator::HexagonalPrism},
+                    {"gmsh", MeshGenerator::Gmsh}});
+  const std::string generatorName = section.text("generator");
+  std::vector<std::string> allowed = common;
+  for (const auto& [name, keys] : generatorKeys)
+    if (name == generatorName) allowed.insert(allowed.end(), keys.begin(), keys.end());
+  section.allowOnly(allowed, "for generator " + generatorName);
+
+  auto positive = [&](const std::string& key) {
+    const double value = section.number(key);
+    requirePositive(section, key, value);
+    return value;
+  };
+  switch (mesh.generator) {
+    case MeshGenerator::Plate:
+      mesh.lengthX = positive("length-x");
+      mesh.lengthY = positive("length-y");
+      break;
+    case MeshGenerator::Cylinder:
+      mesh.radius = positive("radius");
+      mesh.height = positive("height");
+      break;
+    case MeshGenerator::HexagonalPrism:
+      mesh.side = positive("side");
+      mesh.length = positive("length");
+      break;
+    case MeshGenerator::Gmsh:
+      mesh.file = resolveAgainst(baseDirectory, section.text("file"));
+      break;
+  }
+  mesh.spacing = section.number("spacing");
+  if (!(mesh.spacing > 0.0))
+    section.fail("spacing", "the grid spacing Δx must be positive, got " + formatNumber(mesh.spacing));
+
+  for (const auto& [name, crack] : section.sublistOrEmpty("pre-cracks").namedItems()) {
+    crack.allowOnly({"start", "end", "normal"});
+    const Vector3 start = crack.vector3("start"), end = crack.vector3("end");
+    const Vector3 normal = crack.vector3("normal");
+    const Vector3 along{end[0] - start[0], end[1] - start[1], end[2] - start[2]};
+    if (!(norm(along) > 0.0)) crack.fail("end", "must differ from start (a crack needs a length)");
+    if (!(norm(cross(along, normal)) > 1e-12 * norm(along) * norm(normal)))
+      crack.fail("normal", "must be a non-zero vector not parallel to end - start (the shell normal at the crack)");
+    deck::PreCrack preCrack{name, {}};
+    for (int d = 0; d < 3; ++d) {
+      preCrack.segment.start[d] = start[d];
+      preCrack.segment.end[d] = end[d];
+      preCrack.segment.normal[d] = normal[d] / norm(normal);
+    }
+    mesh.preCracks.push_back(preCrack);
+  }
+
+  for (const auto& [name, nodeSet] : section.sublistOrEmpty("node-sets").namedItems()) {
+    nodeSet.allowOnly({"box"});
+    const Section box = nodeSet.sublist("box");
+    box.allowOnly({"min", "max"});
+    deck::BoxNodeSet boxSet{name, box.vector3("min"), box.vector3("max")};
+    for (int d = 0; d < 3; ++d)
+      if (boxSet.max[d] < boxSet.min[d])
+        box.fail("max", "every component must be >= min's; component " + std::to_string(d) + " is " +
+                            formatNumber(boxSet.max[d]) + " < " + formatNumber(boxSet.min[d]));
+    mesh.nodeSets.push_back(boxSet);
+  }
+  return mesh;
+}
+
+deck::Material readMaterial(const Section& section) {
+  section.allowOnly({"young-modulus", "poisson-ratio", "density", "thickness", "fracture-energy"});
+  deck::Material material;
+  material.youngModulus = section.number("young-modulus");
+  material.poissonRatio = section.number("poisson-ratio");
+  material.density = section.number("density");
+  material.thickness = section.number("thickness");
+  material.fractureEnergy = section.optionalNumber("fracture-energy");
+  requirePositive(section, "young-modulus", material.youngModulus);
+  // Strain energy stays positive definite only for -1 < ν < 1/2.
+  if (!(material.poissonRatio > -1.0 && material.poissonRatio < 0.5))
+    section.fail("poisson-ratio",
+                 "must lie in (-1, 0.5), got " + formatNumber(material.poissonRatio));
+  requirePositive(section, "density", material.density);
+  requirePositive(section, "thickness", material.thickness);
+  if (material.fractureEnergy && *material.fractureEnergy < 0.0)
+    section.fail("fracture-energy",
+                 "must be >= 0 (G_c [J/m^2]), got " + formatNumber(*material.fractureEnergy));
+  return material;
+}
+
+deck::Peridynamics readPeridynamics(const Section& section) {
+  section.allowOnly({"horizon-factor", "force-kernel"});
+  deck::Peridynamics pd;
+  pd.horizonFactor = section.number("horizon-factor", pd.horizonFactor);
+  if (pd.horizonFactor < 1.0)
+    section.fail("horizon-factor",
+                 "must be >= 1 so that the horizon reaches the nearest neighbours "
+                 "(δ = m Δx >= Δx), got " + formatNumber(pd.horizonFactor));
+  pd.forceKernel = section.choice<deck::ForceKernel>(
+      "force-kernel",
+      {{"bond-scatter", deck::ForceKernel::BondScatter}, {"node-gather", deck::ForceKernel::NodeGather}},
+      pd.forceKernel);
+  return pd;
+}
+
+deck::PdRegion readPdRegion(const std::string& name, const Section& region) {
+  const std::vector<std::string> shapes{"box", "cylinder", "element-set"};
+  region.allowOnly(shapes);
+  const auto present = region.keys();
+  if (present.size() != 1)
+    region.fail("", "needs exactly one of box, cylinder, element-set; got " +
+                        (present.empty() ? std::string("none") : joinWords(present)));
+  deck::PdRegion result;
+  result.name = name;
+  const Section shape = region.sublist(present.front());
+  if (present.front() == "box") {
+    shape.allowOnly({"min", "max"});
+    result.shape = deck::RegionShape::Box;
+    result.boxMin = shape.vector3("min");
+    result.boxMax = shape.vector3("max");
+    for (int d = 0; d < 3; ++d)
+      if (result.boxMax[d] < result.boxMin[d])
+        shape.fail("max", "every component must be >= min's; component " + std::to_string(d) +
+                              " is " + formatNumber(result.boxMax[d]) + " < " +
+                              formatNumber(result.boxMin[d]));
+  } else if (present.front() == "cylinder") {
+    shape.allowOnly({"center", "axis", "radius", "half-length"});
+    result.shape = deck::RegionShape::Cylinder;
+    result.center = shape.vector3("center");
+    const Vector3 axis = shape.vector3("axis");
+    if (!(norm(axis) > 0.0)) shape.fail("axis", "must be a non-zero vector");
+    for (int d = 0; d < 3; ++d) result.axis[d] = axis[d] / norm(axis);
+    result.radius = shape.number("radius");
+    requirePositive(shape, "radius", result.radius);
+    result.halfLength = shape.number("half-length");
+    requirePositive(shape, "half-length", result.halfLength);
+  } else {
+    shape.allowOnly({"name"});
+    result.shape = deck::RegionShape::ElementSet;
+    result.elementSet = shape.text("name");
+  }
+  return result;
+}
+
+deck::Zones readZones(const Section& section) {
+  section.allowOnly({"default", "pd-regions", "pd-ratio"});
+  deck::Zones zones;
+  zones.defaultKind = section.choice<deck::ZoneKind>(
+      "default", {{"pd", deck::ZoneKind::Pd}, {"ccm", deck::ZoneKind::Ccm}}, zones.defaultKind);
+  if (section.has("pd-regions") && section.has("pd-ratio"))
+    section.fail("pd-ratio", "give either pd-regions or pd-ratio, not both");
+  if (zones.defaultKind == deck::ZoneKind::Pd)
+    for (const char* key : {"pd-regions", "pd-ratio"})
+      if (section.has(key))
+        section.fail(key, "needs default: ccm (with default: pd every element is already PD)");
+  for (const auto& [name, region] : section.sublistOrEmpty("pd-regions").namedItems())
+    zones.pdRegions.push_back(readPdRegion(name, region));
+  if (section.has("pd-ratio")) {
+    const Section ratio = section.sublist("pd-ratio");
+    ratio.allowOnly({"target", "around"});
+    deck::PdRatio pdRatio;
+    pdRatio.target = ratio.number("target");
+    if (!(pdRatio.target >= 0.0 && pdRatio.target <= 1.0))
+      ratio.fail("target", "must lie in [0, 1] (the fraction of elements flagged PD), got " +
+                               formatNumber(pdRatio.target));
+    const Section around = ratio.sublist("around");
+    for (const auto& name : around.keys())
+      pdRatio.around.push_back({name, around.vector3(name)});
+    if (pdRatio.around.empty()) ratio.fail("around", "needs at least one named point");
+    zones.pdRatio = pdRatio;
+  }
+  return zones;
+}
+
+const std::vector<std::pair<std::string, deck::Dof>> dofNames{
+    {"ux", deck::Dof::Ux}, {"uy", deck::Dof::Uy}, {"uz", deck::Dof::Uz},
+    {"rx", deck::Dof::Rx}, {"ry", deck::Dof::Ry}, {"rz", deck::Dof::Rz}};
+
+template <class Enum>
+std::vector<Enum> readDistinct(const Section& section, const std::string& key,
+                               const std::vector<std::pair<std::string, Enum>>& options) {
+  std::vector<Enum> result;
+  for (const auto& word : section.words(key)) {
+    const Enum value = section.choose(word, key, options);
+    if (std::find(result.begin(), result.end(), value) != result.end())
+      section.fail(key, "'" + word + "' is listed twice");
+    result.push_back(value);
+  }
+  return result;
+}
+
+std::vector<deck::Support> readSupports(const Section& section) {
+  std::vector<deck::Support> supports;
+  for (const auto& [name, item] : section.namedItems()) {
+    item.allowOnly({"set", "dofs", "value", "curve"});
+    deck::Support support;
+    support.name = name;
+    support.set = item.text("set");
+    support.dofs = readDistinct(item, "dofs", dofNames);
+    support.value = item.number("value", 0.0);
+    support.curve = item.text("curve", "");
+    supports.push_back(support);
+  }
+  return supports;
+}
+
+std::vector<deck::Load> readLoads(const Section& section) {
+  using deck::LoadType;
+  std::vector<deck::Load> loads;
+  for (const auto& [name, item] : section.namedItems()) {
+    item.allowOnly({"type", "set", "element-set", "vector", "value", "follower", "curve"});
+    deck::Load load;
+    load.name = name;
+    load.type = item.choice<LoadType>("type", {{"point-force", LoadType::PointForce},
+                                                {"edge-traction", LoadType::EdgeTraction},
+                                                {"pressure", LoadType::Pressure}});
+    const std::string typeName = item.text("type");
+    switch (load.type) {
+      case LoadType::PointForce:
+        item.allowOnly({"type", "set", "vector", "curve"}, "for type point-force");
+        load.set = item.text("set");
+        load.vector = item.vector3("vector");
+        break;
+      case LoadType::EdgeTraction:
+        item.allowOnly({"type", "set", "vector", "value", "curve"}, "for type edge-traction");
+        load.set = item.text("set");
+        if (item.has("vector") == item.has("value"))
+          item.fail("", "needs exactly one of vector (traction [Pa], global direction) or value "
+                        "(normal traction [Pa], positive pulls outward)");
+        if (item.has("vector")) load.vector = item.vector3("vector");
+        if (item.has("value")) load.value = item.number("value");
+        break;
+      case LoadType::Pressure:
+        item.allowOnly({"type", "element-set", "value", "follower", "curve"}, "for type pressure");
+        load.set = item.text("element-set", "");
+        load.value = item.number("value");
+        load.follower = item.flag("follower", false);
+        break;
+    }
+    load.curve = item.text("curve", "");
+    loads.push_back(load);
+  }
+  return loads;
+}
+
+std::vector<deck::Curve> readCurves(const Section& section) {
+  using deck::CurveType;
+  std::vector<deck::Curve> curves;
+  for (const auto& [name, item] : section.namedItems()) {
+    item.allowOnly({"type", "end-time", "time", "value"});
+    deck::Curve curve;
+    curve.name = name;
+    curve.type = item.choice<CurveType>(
+        "type", {{"ramp", CurveType::Ramp}, {"step", CurveType::Step}, {"table", CurveType::Table}});
+    switch (curve.type) {
+      case CurveType::Ramp:
+        item.allowOnly({"type", "end-time"}, "for type ramp");
+        curve.endTime = item.number("end-time");
+        requirePositive(item, "end-time", curve.endTime);
+        break;
+      case CurveType::Step:
+        item.allowOnly({"type", "time"}, "for type step");
+        curve.stepTime = item.number("time", 0.0);
+        if (curve.stepTime < 0.0)
+          item.fail("time", "must be >= 0, got " + formatNumber(curve.stepTime));
+        break;
+      case CurveType::Table:
+        item.allowOnly({"type", "time", "value"}, "for type table");
+        curve.times = item.numbers("time");
+        curve.values = item.numbers("value");
+        if (curve.times.size() < 2) item.fail("time", "a table needs at least 2 points");
+        if (curve.values.size() != curve.times.size())
+          item.fail("value", "has " + std::to_string(curve.values.size()) + " entries but time has " +
+                                 std::to_string(curve.times.size()));
+        for (std::size_t i = 1; i < curve.times.size(); ++i)
+          if (!(curve.times[i] > curve.times[i - 1]))
+            item.fail("time", "must be strictly increasing: time[" + std::to_string(i) + "] = " +
+                                  formatNumber(curve.times[i]) + " is not greater than time[" +
+                                  std::to_string(i - 1) + "] = " + formatNumber(curve.times[i - 1]));
+        break;
+    }
+    curves.push_back(curve);
+  }
+  return curves;
+}
+
+deck::Solver readSolver(const Section& section) {
+  using deck::SolverType;
+  const std::vector<std::string> explicitKeys{"type", "end-time", "steps", "dt", "safety-factor", "damping"};
+  const std::vector<std::string> implicitKeys{"type", "increments", "max-iterations", "tolerance",
+                                              "preconditioner"};
+  std::vector<std::string> allKeys = explicitKeys;
+  allKeys.insert(allKeys.end(), implicitKeys.begin() + 1, implicitKeys.end());
+  section.allowOnly(allKeys);
+
+  deck::Solver solver;
+  solver.type = section.choice<SolverType>(
+      "type", {{"explicit", SolverType::Explicit}, {"implicit", SolverType::Implicit}});
+  if (solver.type == SolverType::Explicit) {
+    section.allowOnly(explicitKeys, "for solver type explicit");
+    auto& settings = solver.explicitSettings;
+    if (section.has("end-time") == section.has("steps"))
+      section.fail("", "an explicit run needs exactly one of end-time [s] or steps");
+    if (section.has("end-time")) {
+      settings.endTime = section.number("end-time");
+      requirePositive(section, "end-time", *settings.endTime);
+    } else {
+      settings.steps = section.integer("steps");
+      if (*settings.steps < 1) section.fail("steps", "must be >= 1, got " + std::to_string(*settings.steps));
+    }
+    settings.timeStep = section.optionalNumber("dt");
+    if (settings.timeStep) requirePositive(section, "dt", *settings.timeStep);
+    settings.safetyFactor = section.number("safety-factor", settings.safetyFactor);
+    if (!(settings.safetyFactor > 0.0 && settings.safetyFactor <= 1.0))
+      section.fail("safety-factor", "must lie in (0, 1] (a fraction of the stable time step), got " +
+                                        formatNumber(settings.safetyFactor));
+    settings.damping = section.number("damping", settings.damping);
+    if (settings.damping < 0.0)
+      section.fail("damping", "must be >= 0 [1/s], got " + formatNumber(settings.damping));
+  } else {
+    section.allowOnly(implicitKeys, "for solver type implicit");
+    auto& settings = solver.implicitSettings;
+    auto count = [&](const std::string& key, int fallback) {
+      const long long value = section.integer(key, fallback);
+      if (value < 1 || value > std::numeric_limits<int>::max())
+        section.fail(key, "must be a whole number >= 1, got " + std::to_string(value));
+      return int(value);
+    };
+    settings.increments = count("increments", settings.increments);
+    settings.maxIterations = count("max-iterations", settings.maxIterations);
+    settings.tolerance = section.number("tolerance", settings.tolerance);
+    if (!(settings.tolerance > 0.0 && settings.tolerance < 1.0))
+      section.fail("tolerance", "must lie in (0, 1) (relative residual norm), got " +
+                                    formatNumber(settings.tolerance));
+    settings.preconditioner = section.choice<deck::Preconditioner>(
+        "preconditioner",
+        {{"jacobi", deck::Preconditioner::Jacobi}, {"block-jacobi", deck::Preconditioner::BlockJacobi}},
+        settings.preconditioner);
+  }
+  return solver;
+}
+
+deck::Output readOutput(const Section& section, const std::filesystem::path& baseDirectory) {
+  section.allowOnly({"directory", "every", "fields", "history"});
+  deck::Output output;
+  output.directory = resolveAgainst(baseDirectory, section.text("directory", output.directory));
+  output.every = section.integer("every", output.every);
+  if (output.every < 0)
+    section.fail("every", "must be >= 0 (0 writes the final state only), got " + std::to_string(output.every));
+  if (section.has("fields"))
+    output.fields = readDistinct<deck::OutputField>(
+        section, "fields",
+        {{"displacement", deck::OutputField::Displacement}, {"rotation", deck::OutputField::Rotation},
+         {"velocity", deck::OutputField::Velocity}, {"damage", deck::OutputField::Damage},
+         {"zone", deck::OutputField::Zone}});
+  if (section.has("history"))
+    output.history = readDistinct<deck::HistoryQuantity>(
+        section, "history",
+        {{"energy", deck::HistoryQuantity::Energy}, {"reactions", deck::HistoryQuantity::Reactions},
+         {"broken-bonds", deck::HistoryQuantity::BrokenBonds},
+         {"crack-tip", deck::HistoryQuantity::CrackTip}});
+  return output;
+}
+
+// Rules that tie sections together.
+void checkCrossReferences(Deck& deck, const Section& root) {
+  const auto& material = deck.material;
+  if (deck.zones.hasPd() && material.poissonRatio > 1.0 / 3.0) {
+    const std::string where = deck.zones.defaultKind == deck::ZoneKind::Pd ? "zones.default is pd"
+                              : !deck.zones.pdRegions.empty()              ? "zones.pd-regions is set"
+                                                                           : "zones.pd-ratio is set";
+    root.fail("material.poisson-ratio",
+              "microbeam PD needs nu <= 1/3 (model.md §2): c_bz and c_tor turn negative; got " +
+                  formatNumber(material.poissonRatio) + " and " + where);
+  }
+  auto checkCurve = [&](const std::string& path, const std::string& curve) {
+    if (curve.empty() || deck.findCurve(curve)) return;
+    std::vector<std::string> names;
+    for (const auto& defined : deck.curves) names.push_back(defined.name);
+    root.fail(path, "unknown curve '" + curve + "'; " +
+                        (names.empty() ? std::string("no curves are defined") : "defined curves: " + joinWords(names)));
+  };
+  for (const auto& support : deck.supports) checkCurve("supports." + support.name + ".curve", support.curve);
+  for (const auto& load : deck.loads) checkCurve("loads." + load.name + ".curve", load.curve);
+
+  if (deck.supports.empty()) {
+    if (deck.solver.type == deck::SolverType::Implicit)
+      root.fail("supports", "an unsupported model is singular: the implicit solver needs at least one support");
+    deck.warnings.push_back(
+        "supports: none given: the model flies free (rigid-body motion is possible); "
+        "allowed for the explicit solver");
+  }
+  const auto& fields = deck.output.fields;
+  if (deck.solver.type == deck::SolverType::Implicit &&
+      std::find(fields.begin(), fields.end(), deck::OutputField::Velocity) != fields.end())
+    root.fail("output.fields", "velocity exists only for the explicit solver");
+  if (material.fractureEnergy && !deck.zones.hasPd())
+    deck.warnings.push_back(
+        "material.fracture-energy: the model has no PD zone, and only PD bonds fracture (model.md §3)");
+}
+
+// ---------------------------------------------------------------- text level
+
+// Teuchos' reader takes one top-level map and asserts on anything else; say so plainly.
+void checkSingleRootKey(const std::string& text, const std::string& source) {
+  std::istringstream lines(text);
+  std::string line;
+  int lineNumber = 0;
+  bool rootSeen = false;
+  while (std::getline(lines, line)) {
+    ++lineNumber;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || std::isspace(static_cast<unsigned char>(line[0])) || line[0] == '#' ||
+        line[0] == '%' || line.rfind("---", 0) == 0 || line.rfind("...", 0) == 0)
+      continue;
+    const std::string key = line.substr(0, line.find(':'));
+    if (rootSeen)
+      throw DeckError(source, "",
+                      "line " + std::to_string(lineNumber) + ": a second top-level key '" + key +
+                          "'; every key goes under the single root key '" + rootKey + ":' (indent it)",
+                      lineNumber);
+    std::string rest = line.find(':') == std::string::npos ? "" : line.substr(line.find(':') + 1);
+    rest = rest.substr(0, rest.find('#'));
+    rest.erase(0, rest.find_first_not_of(' '));
+    if (key != rootKey || line.find(':') == std::string::npos || !(rest.empty() || rest[0] == '{'))
+      throw DeckError(source, "",
+                      "line " + std::to_string(lineNumber) + ": a deck is one map under the root key '" +
+                          rootKey + ":' (Teuchos YAML reads a single top-level map), found '" + line + "'",
+                      lineNumber);
+    rootSeen = true;
+  }
+  if (!rootSeen)
+    throw DeckError(source, "", std::string("empty deck: expected the root key '") + rootKey + ":'");
+}
+
+// Teuchos' lexer takes ASCII only. Comments may hold anything (units like m², Δx), so their
+// non-ASCII bytes become spaces; elsewhere a non-ASCII character is an error with its place.
+std::string blankNonAsciiInComments(const std::string& text, const std::string& source) {
+  std::string result = text;
+  int lineNumber = 1;
+  std::size_t lineStart = 0;
+  char quote = 0;
+  bool comment = false;
+  for (std::size_t i = 0; i < result.size(); ++i) {
+    const char c = result[i];
+    if (c == '\n') {
+      ++lineNumber;
+      lineStart = i + 1;
+      comment = false;
+      quote = 0;  // flow scalars spanning lines are not used in decks
+      continue;
+    }
+    if (comment) {
+      if (static_cast<unsigned char>(c) >= 0x80) result[i] = ' ';
+      continue;
+    }
+    if (static_cast<unsigned char>(c) >= 0x80) {
+      int column = 1;  // in characters: count UTF-8 lead bytes before it
+      for (std::size_t j = lineStart; j < i; ++j)
+        if ((static_cast<unsigned char>(text[j]) & 0xC0) != 0x80) ++column;
+      throw DeckError(source, "",
+                      "line " + std::to_string(lineNumber) + ", column " + std::to_string(column) +
+                          ": non-ASCII character; Teuchos' YAML reader takes ASCII only outside "
+                          "comments (write dx for Δx, m^2 for m²)",
+                      lineNumber);
+    }
+    if (quote) {
+      if (c == '\\' && quote == '"') ++i;
+      else if (c == quote) quote = 0;
+    } else if ((c == '"' || c == '\'') &&
+               (i == lineStart || std::strchr(" \t[{,", result[i - 1]) != nullptr)) {
+      quote = c;  // a quote opens a scalar only where a scalar can start (not in "Bobaru's")
+    } else if (c == '#' && (i == lineStart || result[i - 1] == ' ' || result[i - 1] == '\t')) {
+      comment = true;
+    }
+  }
+  return result;
+}
+
+// Teuchos' parser messages carry its source location and parser state; keep the location in
+// the deck and what was expected.
+DeckError translateParserError(const std::string& message, const std::string& text,
+                               const std::string& source) {
+  int lineNumber = 0;
+  std::string where;
+  std::smatch match;
+  if (std::regex_search(message, match, std::regex(R"(line (\d+)(?: column (\d+))?)"))) {
+    lineNumber = std::stoi(match[1]);
+    where = " at line " + match[1].str() + (match[2].matched ? ", column " + match[2].str() : "");
+  }
+  std::vector<std::string> lines;
+  {
+    std::istringstream stream(message.substr(0, message.find("Lexer text:")));
+    for (std::string text; std::getline(stream, text);) lines.push_back(text);
+  }
+  auto isCaret = [](const std::string& text) {
+    return !text.empty() && text.find_first_not_of(" ^") == std::string::npos;
+  };
+  // lines[0] is "error: <what> at line L column C of <source>" or "error: Parser failure ...".
+  std::string detail = lines.empty() ? "" : lines[0];
+  if (detail.rfind("error: ", 0) == 0) detail.erase(0, 7);
+  detail = std::regex_replace(detail, std::regex(R"(\s*\(?(at )?line \d+.*$)"), "");
+  if (detail == "Parser failure") detail.clear();
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const std::string& line = lines[i];
+    // Skipped: Teuchos' own source location, the echoed deck line above its caret, the caret.
+    const bool echoedLine = i + 1 < lines.size() && isCaret(lines[i + 1]);
+    if (line.empty() || isCaret(line) || echoedLine || line.find(".cpp:") != std::string::npos ||
+        line.rfind("Throw ", 0) == 0)
+      continue;
+    detail += (detail.empty() ? "" : line[0] == '(' ? " " : "; ") + line;
+  }
+  std::smatch duplicate;
+  if (std::regex_search(message, duplicate, std::regex(R"re(Parameter "([^"]*)" already exists)re")))
+    detail = "duplicate key '" + duplicate[1].str() + "'";
+  if (lineNumber > 0) {
+    std::istringstream stream(text);
+    std::string offending;
+    int current = 0;
+    while (current < lineNumber && std::getline(stream, offending)) ++current;
+    const auto first = offending.find_first_not_of(' ');
+    if (first != std::string::npos && offending.compare(first, 2, "- ") == 0 &&
+        offending.find(':') != std::string::npos)
+      detail += " (a list of maps: Teuchos holds none, write repeated items as named maps)";
+  }
+  return DeckError(source, "", "YAML error" + where + (detail.empty() ? "" : ": " + detail), lineNumber);
+}
+
+}  // namespace
+
+Deck parseDeck(const std::string& yamlText, const std::string& sourceName) {
+  checkSingleRootKey(yamlText, sourceName);
+  const std::string asciiText = blankNonAsciiInComments(yamlText, sourceName);
+  Teuchos::RCP<ParameterList> parsed;
+  try {
+    parsed = Teuchos::YAMLParameterList::parseYamlText(asciiText, sourceName);
+  } catch (const std::exception& error) {
+    throw translateParserError(error.what(), asciiText, sourceName);
+  }
+  const Section root(*parsed, "", sourceName);
+  root.allowOnly({"version", "title", "mesh", "material", "peridynamics", "zones", "supports",
+                  "loads", "curves", "solver", "output"});
+  const std::filesystem::path baseDirectory = std::filesystem::path(sourceName).parent_path();
+
+  Deck deck;
+  deck.sourceName = sourceName;
+  const long long version = root.integer("version");
+  if (version != 1)
+    root.fail("version", "unsupported deck version " + std::to_string(version) + "; this perishell reads version 1");
+  deck.version = int(version);
+  deck.title = root.text("title", "");
+  deck.mesh = readMesh(root.sublist("mesh"), baseDirectory);
+  deck.material = readMaterial(root.sublist("material"));
+  deck.peridynamics = readPeridynamics(root.sublistOrEmpty("peridynamics"));
+  deck.zones = readZones(root.sublistOrEmpty("zones"));
+  deck.supports = readSupports(root.sublistOrEmpty("supports"));
+  deck.loads = readLoads(root.sublistOrEmpty("loads"));
+  deck.curves = readCurves(root.sublistOrEmpty("curves"));
+  deck.solver = readSolver(root.sublist("solver"));
+  deck.output = readOutput(root.sublistOrEmpty("output"), baseDirectory);
+  checkCrossReferences(deck, root);
+  return deck;
+}
+
+Deck readDeck(const std::string& path) {
+  std::error_code error;
+  const auto status = std::filesystem::status(path, error);
+  if (!std::filesystem::exists(status))
+    throw DeckError(path, "", "cannot read the deck: no such file");
+  if (std::filesystem::is_directory(status))
+    throw DeckError(path, "", "cannot read the deck: it is a directory");
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw DeckError(path, "", std::string("cannot read the deck: ") + std::strerror(errno));
+  std::ostringstream text;
+  text << file.rdbuf();
+  if (file.bad()) throw DeckError(path, "", "cannot read the deck: read error");
+  return parseDeck(text.str(), path);
+}
+
+}  // namespace perishell

@@ -1,0 +1,238 @@
+#include <perishell/mesh/generators.hpp>
+#include <perishell/mesh/gmsh_reader.hpp>
+#include <perishell/model/model.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+#include <set>
+#include <string>
+#include <utility>
+
+namespace perishell::model {
+
+namespace {
+
+using Vector3 = deck::Vector3;
+
+[[noreturn]] void fail(const Deck& deck, const std::string& keyPath, const std::string& reason) {
+  throw DeckError(deck.sourceName, keyPath, reason);
+}
+
+mesh::ShellMesh buildMesh(const Deck& deck) {
+  const auto& spec = deck.mesh;
+  try {
+    switch (spec.generator) {
+      case deck::MeshGenerator::Plate: return mesh::makePlate(spec.lengthX, spec.lengthY, spec.spacing);
+      case deck::MeshGenerator::Cylinder: return mesh::makeCylinder(spec.radius, spec.height, spec.spacing);
+      case deck::MeshGenerator::HexagonalPrism:
+        return mesh::makeHexagonalPrism(spec.side, spec.length, spec.spacing);
+      case deck::MeshGenerator::Gmsh: return mesh::readGmsh(spec.file);
+    }
+  } catch (const std::exception& error) {
+    fail(deck, "mesh", error.what());
+  }
+  fail(deck, "mesh.generator", "unknown generator");
+}
+
+Vector3 nodePosition(const HostQuadMesh& mesh, LocalIndex node) {
+  return {mesh.coordinates(node, 0), mesh.coordinates(node, 1), mesh.coordinates(node, 2)};
+}
+
+Vector3 elementCentroid(const HostQuadMesh& mesh, LocalIndex element) {
+  Vector3 centroid{0.0, 0.0, 0.0};
+  for (int a = 0; a < 4; ++a)
+    for (int d = 0; d < 3; ++d) centroid[d] += 0.25 * mesh.coordinates(mesh.quads(element, a), d);
+  return centroid;
+}
+
+bool inBox(const Vector3& p, const Vector3& min, const Vector3& max) {
+  for (int d = 0; d < 3; ++d)
+    if (p[d] < min[d] || p[d] > max[d]) return false;
+  return true;
+}
+
+bool inCylinder(const Vector3& p, const deck::PdRegion& region) {
+  Vector3 offset{};
+  double along = 0.0;
+  for (int d = 0; d < 3; ++d) {
+    offset[d] = p[d] - region.center[d];
+    along += offset[d] * region.axis[d];
+  }
+  double radialSquared = 0.0;
+  for (int d = 0; d < 3; ++d) {
+    const double radial = offset[d] - along * region.axis[d];
+    radialSquared += radial * radial;
+  }
+  return std::abs(along) <= region.halfLength && radialSquared <= region.radius * region.radius;
+}
+
+double distanceSquared(const Vector3& a, const Vector3& b) {
+  double sum = 0.0;
+  for (int d = 0; d < 3; ++d) sum += (a[d] - b[d]) * (a[d] - b[d]);
+  return sum;
+}
+
+void addDeckNodeSets(const Deck& deck, mesh::ShellMesh& shell) {
+  for (const auto& boxSet : deck.mesh.nodeSets) {
+    const std::string key = "mesh.node-sets." + boxSet.name;
+    if (shell.sets.nodeSets.count(boxSet.name) || shell.sets.edgeSets.count(boxSet.name))
+      fail(deck, key, "the mesh already has a set named '" + boxSet.name + "'");
+    std::vector<LocalIndex> nodes;
+    for (LocalIndex node = 0; node < shell.mesh.numNodes(); ++node)
+      if (inBox(nodePosition(shell.mesh, node), boxSet.min, boxSet.max)) nodes.push_back(node);
+    if (nodes.empty()) fail(deck, key + ".box", "contains no node of the mesh");
+    shell.sets.nodeSets[boxSet.name] = std::move(nodes);
+  }
+}
+
+// Nodes of a support's or load's set: a node set, or the nodes of an edge set.
+std::vector<LocalIndex> nodesOfSet(const Deck& deck, const mesh::MeshSets& sets, const std::string& name,
+                                   const std::string& keyPath) {
+  if (const auto found = sets.nodeSets.find(name); found != sets.nodeSets.end()) return found->second;
+  if (const auto found = sets.edgeSets.find(name); found != sets.edgeSets.end()) {
+    std::set<LocalIndex> nodes;
+    for (const auto& [first, second] : found->second) nodes.insert({first, second});
+    return {nodes.begin(), nodes.end()};
+  }
+  try {
+    sets.nodeSet(name);  // throws, listing the node sets that exist
+  } catch (const std::invalid_argument& error) {
+    fail(deck, keyPath, error.what());
+  }
+  fail(deck, keyPath, "unknown set '" + name + "'");
+}
+
+void checkSetReferences(const Deck& deck, const mesh::MeshSets& sets, long long& constrainedDofs) {
+  std::set<std::pair<LocalIndex, int>> constrained;
+  for (const auto& support : deck.supports) {
+    const auto nodes = nodesOfSet(deck, sets, support.set, "supports." + support.name + ".set");
+    for (const LocalIndex node : nodes)
+      for (const auto dof : support.dofs) constrained.insert({node, static_cast<int>(dof)});
+  }
+  constrainedDofs = static_cast<long long>(constrained.size());
+  for (const auto& load : deck.loads) {
+    const std::string key = "loads." + load.name + ".set";
+    try {
+      switch (load.type) {
+        case deck::LoadType::PointForce: nodesOfSet(deck, sets, load.set, key); break;
+        case deck::LoadType::EdgeTraction: sets.edgeSet(load.set); break;
+        case deck::LoadType::Pressure:
+          if (!load.set.empty()) sets.elementSet(load.set);
+          break;
+      }
+    } catch (const std::invalid_argument& error) {
+      fail(deck, load.type == deck::LoadType::Pressure ? "loads." + load.name + ".element-set" : key,
+           error.what());
+    }
+  }
+}
+
+// PD flags per element from zones (docs/deck.md "zones").
+LocalIndex flagPdElements(const Deck& deck, const mesh::ShellMesh& shell,
+                          Kokkos::View<std::uint8_t*, Kokkos::HostSpace>& isPd) {
+  const auto& zones = deck.zones;
+  const HostQuadMesh& mesh = shell.mesh;
+  const LocalIndex numElements = mesh.numElements();
+  isPd = Kokkos::View<std::uint8_t*, Kokkos::HostSpace>("element is pd", numElements);
+  Kokkos::deep_copy(isPd, zones.defaultKind == deck::ZoneKind::Pd ? 1 : 0);
+
+  for (const auto& region : zones.pdRegions) {
+    if (region.shape == deck::RegionShape::ElementSet) {
+      try {
+        for (const LocalIndex element : shell.sets.elementSet(region.elementSet)) isPd(element) = 1;
+      } catch (const std::invalid_argument& error) {
+        fail(deck, "zones.pd-regions." + region.name + ".element-set.name", error.what());
+      }
+      continue;
+    }
+    LocalIndex selected = 0;
+    for (LocalIndex element = 0; element < numElements; ++element) {
+      const Vector3 centroid = elementCentroid(mesh, element);
+      const bool inside = region.shape == deck::RegionShape::Box
+                              ? inBox(centroid, region.boxMin, region.boxMax)
+                              : inCylinder(centroid, region);
+      if (inside) {
+        isPd(element) = 1;
+        ++selected;
+      }
+    }
+    if (selected == 0)
+      fail(deck, "zones.pd-regions." + region.name, "contains no element centroid of the mesh");
+  }
+
+  if (zones.pdRatio) {
+    // The paper's PD ratio: the round(target N) elements nearest to the given points.
+    std::vector<std::pair<double, LocalIndex>> byDistance(numElements);
+    for (LocalIndex element = 0; element < numElements; ++element) {
+      const Vector3 centroid = elementCentroid(mesh, element);
+      double nearest = INFINITY;
+      for (const auto& point : zones.pdRatio->around)
+        nearest = std::min(nearest, distanceSquared(centroid, point.position));
+      byDistance[element] = {nearest, element};
+    }
+    std::sort(byDistance.begin(), byDistance.end());
+    const auto count = static_cast<LocalIndex>(std::llround(zones.pdRatio->target * numElements));
+    for (LocalIndex k = 0; k < count; ++k) isPd(byDistance[k].second) = 1;
+  }
+
+  LocalIndex numPd = 0;
+  for (LocalIndex element = 0; element < numElements; ++element) numPd += isPd(element);
+  return numPd;
+}
+
+// Closest distance from p to the segment a-b.
+double distanceToSegment(const Vector3& p, const double a[3], const double b[3]) {
+  double ab[3], ap[3], lengthSquared = 0.0, projection = 0.0;
+  for (int d = 0; d < 3; ++d) {
+    ab[d] = b[d] - a[d];
+    ap[d] = p[d] - a[d];
+    lengthSquared += ab[d] * ab[d];
+    projection += ab[d] * ap[d];
+  }
+  const double s = std::clamp(projection / lengthSquared, 0.0, 1.0);
+  double sum = 0.0;
+  for (int d = 0; d < 3; ++d) sum += (ap[d] - s * ab[d]) * (ap[d] - s * ab[d]);
+  return std::sqrt(sum);
+}
+
+// A crack lives only where bonds do (model.md §3): some PD node must lie within δ of it.
+void checkPreCracksInPd(const Model& model) {
+  for (const auto& crack : model.deck.mesh.preCracks) {
+    bool nearPd = false;
+    for (std::size_t k = 0; k < model.pdNodes.extent(0) && !nearPd; ++k)
+      nearPd = distanceToSegment(nodePosition(model.shell.mesh, model.pdNodes(k)), crack.segment.start,
+                                 crack.segment.end) <= model.horizon();
+    if (!nearPd)
+      fail(model.deck, "mesh.pre-cracks." + crack.name,
+           "lies outside every PD zone (no PD node within the horizon of it); a crack can only live "
+           "in PD elements (model.md §3)");
+  }
+}
+
+}  // namespace
+
+Model buildModel(const Deck& deck) {
+  Model model;
+  model.deck = deck;
+  model.shell = buildMesh(deck);
+  addDeckNodeSets(deck, model.shell);
+  checkSetReferences(deck, model.shell.sets, model.numConstrainedDofs);
+  model.numPdElements = flagPdElements(deck, model.shell, model.elementIsPd);
+
+  const HostQuadMesh& mesh = model.shell.mesh;
+  std::vector<std::uint8_t> isPdNode(mesh.numNodes(), 0);
+  for (LocalIndex element = 0; element < mesh.numElements(); ++element)
+    if (model.elementIsPd(element))
+      for (int a = 0; a < 4; ++a) isPdNode[mesh.quads(element, a)] = 1;
+  const auto numPdNodes = std::count(isPdNode.begin(), isPdNode.end(), 1);
+  model.pdNodes = Kokkos::View<LocalIndex*, Kokkos::HostSpace>("pd nodes", numPdNodes);
+  LocalIndex next = 0;
+  for (LocalIndex node = 0; node < mesh.numNodes(); ++node)
+    if (isPdNode[node]) model.pdNodes(next++) = node;
+  checkPreCracksInPd(model);
+  return model;
+}
+
+}  // namespace perishell::model

@@ -1,0 +1,296 @@
+// Gmsh MSH 4.1 import: the hand-written tests/data/plate_4x2.msh equals the generated
+// 0.4 m x 0.2 m plate (nodes, quads, orientation, area, sets); orientation repair; files
+// in the style of Mesh.SaveAll = 0; and one "file:line: reason" message per reader error.
+#include <perishell/mesh/generators.hpp>
+#include <perishell/mesh/gmsh_reader.hpp>
+#include <perishell/mesh/node_geometry.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace gmsh_reader_test {
+
+using perishell::LocalIndex;
+using perishell::mesh::HostQuadMesh;
+using perishell::mesh::MeshEdge;
+using perishell::mesh::ShellMesh;
+
+// tests/data, next to this file's directory; PERISHELL_TEST_DATA_DIR overrides it where the
+// binaries run away from the source tree.
+std::string dataPath(const std::string& name) {
+  if (const char* directory = std::getenv("PERISHELL_TEST_DATA_DIR")) return std::string(directory) + "/" + name;
+  std::string here = __FILE__;
+  here = here.substr(0, here.find_last_of('/'));           // tests/mesh
+  return here.substr(0, here.find_last_of('/')) + "/data/" + name;  // tests/data
+}
+
+std::string plateText() {
+  std::ifstream file(dataPath("plate_4x2.msh"));
+  std::ostringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+// The text with `from` (which must occur) replaced by `to`.
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto position = text.find(from);
+  EXPECT_NE(position, std::string::npos) << from;
+  if (position != std::string::npos) text.replace(position, from.size(), to);
+  return text;
+}
+
+template <class ExecutionSpaceT>
+perishell::CoordinateView<Kokkos::HostSpace> nodeNormalsOnHost(const HostQuadMesh& hostMesh) {
+  const auto mesh = perishell::mesh::mirrorTo<typename ExecutionSpaceT::memory_space>(hostMesh);
+  return Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{},
+                                             perishell::mesh::computeNodeNormals(ExecutionSpaceT{}, mesh));
+}
+
+template <class ExecutionSpaceT>
+double totalArea(const HostQuadMesh& hostMesh) {
+  const auto mesh = perishell::mesh::mirrorTo<typename ExecutionSpaceT::memory_space>(hostMesh);
+  const auto areas = Kokkos::create_mirror_view_and_copy(
+      Kokkos::HostSpace{}, perishell::mesh::computeNodeAreas(ExecutionSpaceT{}, mesh));
+  double total = 0.0;
+  for (std::size_t i = 0; i < areas.extent(0); ++i) total += areas(i);
+  return total;
+}
+
+std::vector<std::array<double, 3>> sortedCoordinates(const HostQuadMesh& mesh) {
+  std::vector<std::array<double, 3>> points(mesh.numNodes());
+  for (int node = 0; node < mesh.numNodes(); ++node)
+    for (int k = 0; k < 3; ++k) points[node][k] = mesh.coordinates(node, k);
+  std::sort(points.begin(), points.end());
+  return points;
+}
+
+// For each imported node, the generated node at the same place (within 1e-12 m), or -1.
+std::vector<LocalIndex> matchNodes(const HostQuadMesh& imported, const HostQuadMesh& generated) {
+  std::vector<LocalIndex> match(imported.numNodes(), -1);
+  for (int i = 0; i < imported.numNodes(); ++i)
+    for (int g = 0; g < generated.numNodes(); ++g) {
+      double distance = 0.0;
+      for (int k = 0; k < 3; ++k)
+        distance = std::max(distance, std::abs(imported.coordinates(i, k) - generated.coordinates(g, k)));
+      if (distance < 1e-12) match[i] = g;
+    }
+  return match;
+}
+
+// A quad's nodes rotated to start at the smallest index: equal for the same oriented quad.
+std::array<LocalIndex, 4> canonicalQuad(std::array<LocalIndex, 4> quad) {
+  std::rotate(quad.begin(), std::min_element(quad.begin(), quad.end()), quad.end());
+  return quad;
+}
+
+std::vector<std::array<LocalIndex, 4>> orientedQuads(const HostQuadMesh& mesh,
+                                                     const std::vector<LocalIndex>& rename) {
+  std::vector<std::array<LocalIndex, 4>> quads(mesh.numElements());
+  for (int e = 0; e < mesh.numElements(); ++e) {
+    for (int a = 0; a < 4; ++a) quads[e][a] = rename[mesh.quads(e, a)];
+    quads[e] = canonicalQuad(quads[e]);
+  }
+  std::sort(quads.begin(), quads.end());
+  return quads;
+}
+
+std::vector<LocalIndex> renamedNodes(const std::vector<LocalIndex>& nodes, const std::vector<LocalIndex>& rename) {
+  std::vector<LocalIndex> result;
+  for (LocalIndex node : nodes) result.push_back(rename[node]);
+  std::sort(result.begin(), result.end());
+  return result;
+}
+
+std::vector<MeshEdge> renamedEdges(const std::vector<MeshEdge>& edges, const std::vector<LocalIndex>& rename) {
+  std::vector<MeshEdge> result;
+  for (const auto& edge : edges) result.emplace_back(rename[edge.first], rename[edge.second]);
+  std::sort(result.begin(), result.end());
+  return result;
+}
+
+std::vector<MeshEdge> sortedEdges(std::vector<MeshEdge> edges) {
+  std::sort(edges.begin(), edges.end());
+  return edges;
+}
+
+std::vector<LocalIndex> identity(int size) {
+  std::vector<LocalIndex> result(size);
+  for (int i = 0; i < size; ++i) result[i] = i;
+  return result;
+}
+
+std::string readerError(const std::string& text) {
+  try {
+    perishell::mesh::parseGmsh(text, "mem.msh");
+  } catch (const std::runtime_error& error) {
+    return error.what();
+  }
+  return "no error";
+}
+
+std::string fileError(const std::string& path) {
+  try {
+    perishell::mesh::readGmsh(path);
+  } catch (const std::runtime_error& error) {
+    return error.what();
+  }
+  return "no error";
+}
+
+TEST(TEST_CATEGORY, gmsh_plate_equals_generated_plate) {
+  const ShellMesh imported = perishell::mesh::readGmsh(dataPath("plate_4x2.msh"));
+  const ShellMesh generated = perishell::mesh::makePlate(0.4, 0.2, 0.1);
+  ASSERT_EQ(imported.mesh.numNodes(), 15);
+  ASSERT_EQ(imported.mesh.numElements(), 8);
+  ASSERT_EQ(generated.mesh.numNodes(), 15);
+
+  const auto importedPoints = sortedCoordinates(imported.mesh);
+  const auto generatedPoints = sortedCoordinates(generated.mesh);
+  for (int i = 0; i < 15; ++i)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(importedPoints[i][k], generatedPoints[i][k], 1e-15) << "sorted node " << i;
+
+  const auto toGenerated = matchNodes(imported.mesh, generated.mesh);
+  for (LocalIndex g : toGenerated) ASSERT_GE(g, 0);
+  // Same quads with the same counter-clockwise orientation.
+  EXPECT_EQ(orientedQuads(imported.mesh, toGenerated), orientedQuads(generated.mesh, identity(15)));
+  const auto normals = nodeNormalsOnHost<TEST_EXECSPACE>(imported.mesh);
+  for (int node = 0; node < 15; ++node) {
+    EXPECT_EQ(normals(node, 0), 0.0);
+    EXPECT_EQ(normals(node, 1), 0.0);
+    EXPECT_EQ(normals(node, 2), 1.0);
+  }
+  EXPECT_NEAR(totalArea<TEST_EXECSPACE>(imported.mesh), 0.08, 1e-16);
+
+  const auto& sets = imported.sets;
+  for (const char* side : {"left", "right"}) {
+    EXPECT_EQ(renamedNodes(sets.nodeSet(side), toGenerated), generated.sets.nodeSet(side)) << side;
+    EXPECT_EQ(renamedEdges(sets.edgeSet(side), toGenerated), sortedEdges(generated.sets.edgeSet(side))) << side;
+  }
+  EXPECT_EQ(sets.elementSet("plate"), identity(8));
+  EXPECT_EQ(sets.nodeSet("plate"), identity(15));
+  EXPECT_EQ(sets.nodeSets.size(), 3u);
+  EXPECT_EQ(sets.edgeSets.size(), 2u);
+  EXPECT_EQ(sets.elementSets.size(), 1u);
+}
+
+TEST(TEST_CATEGORY, gmsh_quads_are_oriented_like_their_patch_first_quad) {
+  const ShellMesh generated = perishell::mesh::makePlate(0.4, 0.2, 0.1);
+  // Quad 6 written clockwise: turned back to counter-clockwise (+z).
+  const auto oneFlipped = perishell::mesh::parseGmsh(replaced(plateText(), "6 5 6 14 13", "6 13 14 6 5"), "one.msh");
+  const auto toGenerated = matchNodes(oneFlipped.mesh, generated.mesh);
+  EXPECT_EQ(orientedQuads(oneFlipped.mesh, toGenerated), orientedQuads(generated.mesh, identity(15)));
+
+  // The first quad written clockwise: the whole patch follows it, normals -z, edges reversed.
+  const auto allFlipped = perishell::mesh::parseGmsh(replaced(plateText(), "5 1 5 13 12", "5 12 13 5 1"), "all.msh");
+  const auto normals = nodeNormalsOnHost<TEST_EXECSPACE>(allFlipped.mesh);
+  for (int node = 0; node < allFlipped.mesh.numNodes(); ++node) EXPECT_EQ(normals(node, 2), -1.0);
+  std::vector<MeshEdge> reversedLeft;
+  for (const auto& edge : generated.sets.edgeSet("left")) reversedLeft.emplace_back(edge.second, edge.first);
+  const auto toGeneratedFlipped = matchNodes(allFlipped.mesh, generated.mesh);
+  EXPECT_EQ(renamedEdges(allFlipped.sets.edgeSet("left"), toGeneratedFlipped), sortedEdges(reversedLeft));
+}
+
+TEST(TEST_CATEGORY, gmsh_save_all_off_style_file) {
+  // As Gmsh writes with Mesh.SaveAll = 0: node tags with gaps, nodes of an entity without
+  // quads (dropped), an unnamed physical point (node set "point-4").
+  std::string text = plateText();
+  text = replaced(text, "9 15 1 15", "10 16 1 100");
+  text = replaced(text, "$EndNodes", "0 5 0 1\n100\n1 1 0\n$EndNodes");
+  text = replaced(text, "1 0 0 0 0\n", "1 0 0 0 1 4\n");
+  text = replaced(text, "3 12 1 12", "4 13 1 20");
+  text = replaced(text, "$EndElements", "0 1 15 1\n20 1\n$EndElements");
+  const auto shell = perishell::mesh::parseGmsh(text, "saveall.msh");
+  EXPECT_EQ(shell.mesh.numNodes(), 15);
+  EXPECT_EQ(shell.mesh.numElements(), 8);
+  const auto& corner = shell.sets.nodeSet("point-4");
+  ASSERT_EQ(corner.size(), 1u);
+  EXPECT_EQ(shell.mesh.coordinates(corner[0], 0), 0.0);
+  EXPECT_EQ(shell.mesh.coordinates(corner[0], 1), 0.0);
+  EXPECT_NEAR(totalArea<TEST_EXECSPACE>(shell.mesh), 0.08, 1e-16);
+}
+
+TEST(TEST_CATEGORY, gmsh_written_cylinder_joins_its_patches) {
+  // Written by gmsh 4.8.4 (Mesh.SaveAll = 0) from: four quarter circles of radius 0.1 with
+  // 3 nodes each, extruded 0.3 along z in 2 recombined layers; Physical Surface("wall") = the
+  // four patches, Physical Curve("bottom") = the circles. The circle centre and its
+  // extruded copy lie on no quad and are dropped.
+  const ShellMesh shell = perishell::mesh::readGmsh(dataPath("cylinder_gmsh.msh"));
+  const auto& mesh = shell.mesh;
+  const double pi = 3.14159265358979323846;
+  ASSERT_EQ(mesh.numNodes(), 8 * 3);
+  ASSERT_EQ(mesh.numElements(), 8 * 2);
+  // Patches share their seam nodes: each node is in 2 (rims) or 4 quads.
+  std::vector<int> quadsPerNode(mesh.numNodes(), 0);
+  for (int e = 0; e < mesh.numElements(); ++e)
+    for (int a = 0; a < 4; ++a) ++quadsPerNode[mesh.quads(e, a)];
+  for (int node = 0; node < mesh.numNodes(); ++node) {
+    const double z = mesh.coordinates(node, 2);
+    EXPECT_EQ(quadsPerNode[node], (z == 0.0 || z == 0.3) ? 2 : 4) << "node " << node;
+  }
+  EXPECT_NEAR(totalArea<TEST_EXECSPACE>(mesh), 8 * 2.0 * 0.1 * std::sin(pi / 8) * 0.3, 1e-12);
+  // Gmsh orients the four patches alike; the normals come out radial (outward here).
+  const auto normals = nodeNormalsOnHost<TEST_EXECSPACE>(mesh);
+  for (int node = 0; node < mesh.numNodes(); ++node) {
+    const double x = mesh.coordinates(node, 0), y = mesh.coordinates(node, 1);
+    EXPECT_NEAR((normals(node, 0) * x + normals(node, 1) * y) / std::hypot(x, y), 1.0, 1e-12) << "node " << node;
+  }
+  EXPECT_EQ(shell.sets.elementSet("wall"), identity(16));
+  EXPECT_EQ(shell.sets.edgeSet("bottom").size(), 8u);
+  ASSERT_EQ(shell.sets.nodeSet("bottom").size(), 8u);
+  for (LocalIndex node : shell.sets.nodeSet("bottom")) EXPECT_EQ(mesh.coordinates(node, 2), 0.0);
+}
+
+// A 4-quad Moebius band: rails a0..a3 (tags 1-4) and b0..b3 (tags 5-8); the last quad
+// joins a3-b3 to b0-a0 with a half twist.
+std::string moebiusText() {
+  std::ostringstream text;
+  text << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 8 1 8\n2 1 0 8\n";
+  for (int tag = 1; tag <= 8; ++tag) text << tag << "\n";
+  for (int i = 0; i < 8; ++i) text << (i % 4) << " " << (i / 4) << " 0\n";
+  text << "$EndNodes\n$Elements\n1 4 1 4\n2 1 3 4\n"
+       << "1 1 2 6 5\n2 2 3 7 6\n3 3 4 8 7\n4 4 5 1 8\n$EndElements\n";
+  return text.str();
+}
+
+TEST(TEST_CATEGORY, gmsh_reader_errors_name_file_line_and_reason) {
+  const std::string plate = plateText();
+  EXPECT_EQ(fileError("/nonexistent/plate.msh"),
+            "/nonexistent/plate.msh:0: cannot open the file (No such file or directory)");
+  EXPECT_EQ(readerError(replaced(plate, "4.1 0 8", "2.2 0 8")),
+            "mem.msh:2: MSH version 2.2 is not supported; save as MSH 4.1 (Mesh.MshFileVersion = 4.1)");
+  EXPECT_EQ(readerError(replaced(plate, "4.1 0 8", "4.1 1 8")),
+            "mem.msh:2: binary MSH files are not supported; save as ASCII (Mesh.Binary = 0)");
+  EXPECT_EQ(readerError("$Nodes\n"), "mem.msh:1: expected $MeshFormat first (is this a Gmsh MSH file?), got '$Nodes'");
+  EXPECT_EQ(fileError(dataPath("plate_truncated.msh")),
+            dataPath("plate_truncated.msh") +
+                ":40: truncated $Nodes section: the file ends while reading a node coordinate");
+  EXPECT_EQ(readerError(replaced(plate, "12 15 8 3 9", "12 15 8 3 99")),
+            "mem.msh:80: element 12 refers to unknown node tag 99");
+  EXPECT_EQ(fileError(dataPath("plate_triangle.msh")),
+            dataPath("plate_triangle.msh") +
+                ":81: triangles (element type 2) are not supported: shell elements are 4-node quads "
+                "only (recombine the surface mesh, Mesh.RecombineAll = 1)");
+  EXPECT_EQ(readerError(replaced(plate, "2 8 3\n", "2 8 4\n")),
+            "mem.msh:68: line element 2 (node tags 8 4) is not an edge of any quad");
+  EXPECT_EQ(readerError(replaced(plate, "9 15 1 15", "9 16 1 15")),
+            "mem.msh:23: the header announces 16 nodes but the blocks hold 15");
+  EXPECT_EQ(readerError(replaced(plate, "0.2 0.1 0\n", "0.2 abc 0\n")),
+            "mem.msh:61: expected a node coordinate (a finite number), got 'abc'");
+  EXPECT_EQ(readerError(replaced(plate, "2 1 3 8", "2 9 3 8")),
+            "mem.msh:72: element block on surface 9, which $Entities does not list");
+  EXPECT_EQ(readerError(replaced(plate, "$EndElements", "$EndElement")),
+            "mem.msh:81: expected $EndElements, got '$EndElement'");
+  EXPECT_EQ(readerError(replaced(plate, "14 15 9 10", "14 15 9 14")),
+            "mem.msh:79: quad element 11 repeats node tag 14");
+  EXPECT_EQ(readerError(moebiusText()),
+            "mem.msh:29: quads 4 and 3 cannot be oriented consistently: the surface is not orientable");
+}
+
+}  // namespace gmsh_reader_test
