@@ -15,6 +15,7 @@ namespace perishell::model {
 namespace {
 
 using Vector3 = deck::Vector3;
+using mesh::HostQuadMesh;
 
 [[noreturn]] void fail(const Deck& deck, const std::string& keyPath, const std::string& reason) {
   throw DeckError(deck.sourceName, keyPath, reason);
