@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Packs a CUDA build for a GPU machine that lacks the build machine's packages: the test
-# binaries, the app and the benchmarks (stripped), the shared libraries they need beyond
+# binaries, the app and the benchmarks (stripped), the test data, the shared libraries they need beyond
 # glibc/libstdc++ and the NVIDIA driver, and run-tests.sh, which runs every test binary.
 # Usage: bash cmake/gpu_bundle.sh [BUILD_DIR (default build/cuda)] [OUT_DIR (default build/cuda-bundle)]
 set -euo pipefail
@@ -18,11 +18,13 @@ done
 for b in "$out"/bin/*; do ldd "$b"; done | awk '$3 ~ /^\// {print $3}' | sort -u |
   grep -vE '/(libc|libm|libdl|libpthread|librt|libresolv|ld-linux-x86-64|libstdc\+\+|libgcc_s|libcuda)\.so' |
   while read -r lib; do cp -L "$lib" "$out/lib/"; done
+cp -r "$(dirname "${BASH_SOURCE[0]}")/../tests/data" "$out/data"
 cat > "$out/run-tests.sh" <<'SCRIPT'
 #!/usr/bin/env bash
 # Runs every test binary of the bundle (CUDA and OpenMP categories); exit 1 if any fails.
 cd "$(dirname "$0")"
 export LD_LIBRARY_PATH="$PWD/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+export PERISHELL_TEST_DATA_DIR="$PWD/data"
 failed=0
 for t in bin/*_test_*; do
   echo "=== $t"

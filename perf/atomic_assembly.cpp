@@ -7,29 +7,12 @@
 #include <perishell/mesh/node_areas.hpp>
 #include <perishell/shell/prestressed_membrane.hpp>
 
+#include "median_seconds.hpp"
+
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <vector>
 
-namespace {
-
-template <class Kernel>
-double medianSeconds(int repeats, const Kernel& kernel) {
-  std::vector<double> seconds;
-  for (int r = 0; r < repeats; ++r) {
-    Kokkos::fence();
-    const auto start = std::chrono::steady_clock::now();
-    kernel();
-    Kokkos::fence();
-    seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  }
-  std::sort(seconds.begin(), seconds.end());
-  return seconds[seconds.size() / 2];
-}
-
-}  // namespace
 
 int main(int argc, char* argv[]) {
   Kokkos::ScopeGuard kokkos(argc, argv);
@@ -37,6 +20,7 @@ int main(int argc, char* argv[]) {
   const int maxCells = argc > 2 ? std::max(100, std::atoi(argv[2])) : 1000;
   using perishell::ExecutionSpace;
   using perishell::MemorySpace;
+  using perishell::perf::medianSeconds;
   std::printf("# atomic assembly on %s (concurrency %d), median of %d runs\n", ExecutionSpace::name(),
               ExecutionSpace::concurrency(), repeats);
   std::printf("%10s %10s %16s %16s\n", "nodes", "elements", "areas [elem/s]", "stiffness [elem/s]");

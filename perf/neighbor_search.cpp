@@ -5,11 +5,11 @@
 // Usage: perishell_perf_neighbor_search [repeats] [max bonds]
 #include <perishell/pd/neighbor_search.hpp>
 
+#include "median_seconds.hpp"
+
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <vector>
 
 namespace {
 
@@ -64,17 +64,9 @@ int main(int argc, char* argv[]) {
                    nodesPerSide, nodesPerSide, latticeBonds(nodesPerSide));
       return 1;
     }
-    std::vector<double> seconds;
-    for (int r = 0; r < repeats; ++r) {
-      bonds = {};  // free the previous list first, as a fresh build would find the memory
-      Kokkos::fence();
-      const auto start = std::chrono::steady_clock::now();
-      bonds = perishell::pd::buildBondList(space, positions, horizon, spacing);
-      Kokkos::fence();
-      seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    }
-    std::sort(seconds.begin(), seconds.end());
-    const double median = seconds[seconds.size() / 2];
+    const double median = perishell::perf::medianSeconds(
+        repeats, [&] { bonds = {}; },  // free the previous list, as a fresh build would find the memory
+        [&] { bonds = perishell::pd::buildBondList(space, positions, horizon, spacing); });
     const double numBonds = static_cast<double>(bonds.numBonds());
     std::printf("%10d %12zu %12.4e %14.4e %12.1f\n", bonds.numNodes(), bonds.numBonds(), median,
                 numBonds / median, static_cast<double>(bonds.bytes()) / numBonds);

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -20,6 +21,9 @@ namespace fs = std::filesystem;
 
 // This header's directory is tests/io, whatever the build directory.
 const fs::path testsDirectory = fs::path(__FILE__).parent_path().parent_path();
+// tests/data, or PERISHELL_TEST_DATA_DIR where the binaries run away from the source tree.
+const fs::path testDataDirectory =
+    std::getenv("PERISHELL_TEST_DATA_DIR") ? fs::path(std::getenv("PERISHELL_TEST_DATA_DIR")) : testsDirectory / "data";
 
 std::string readText(const fs::path& path) {
   std::ifstream file(path);
@@ -102,7 +106,7 @@ DeckError deckErrorOf(const std::string& text, const std::string& source = "bad.
 }
 
 TEST(TEST_CATEGORY, deck_glass_plate_example_reads_the_paper_numbers) {
-  const fs::path path = testsDirectory / "data/decks/glass_plate_4_1_2.yaml";
+  const fs::path path = testDataDirectory / "decks/glass_plate_4_1_2.yaml";
   if (!fs::exists(path)) GTEST_SKIP() << "source tree not present: " << path;
   const Deck deck = readDeck(path.string());
 
