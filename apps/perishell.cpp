@@ -2,12 +2,14 @@
 // pass through to Kokkos.
 #include <perishell/cases/pressurised_membrane.hpp>
 #include <perishell/core/runtime.hpp>
+#include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/model.hpp>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <stdexcept>
 #include <string>
@@ -16,14 +18,16 @@
 namespace {
 
 constexpr const char* usage = R"(usage: perishell [--help] [--version] [--backend-info]
-       perishell check DECK.yaml
+       perishell check DECK.yaml [--output DIR]
        perishell membrane [options]
 
 Commands:
   check DECK      Validate a case deck (docs/deck.md), build its model — mesh, zones, PD
                   nodes and, on the device, the bonds — and print a model summary: nodes,
                   elements, PD ratio, bonds, DOF counts. Exit 1 with the deck key and the
-                  reason when the deck is invalid.
+                  reason when the deck is invalid. With --output DIR, also writes
+                  DIR/model.xmf (+ .h5) for ParaView: the mesh with the node fields
+                  pd-node (1 on PD nodes) and bonds (bonds per node).
   membrane        The stack-verification case (the default case until the shell solvers
                   land): a square membrane with fixed edges under uniform tension and
                   pressure, assembled and solved on the build's default device (atomic
@@ -84,10 +88,41 @@ const char* generatorName(perishell::deck::MeshGenerator generator) {
   return "?";
 }
 
+// The model as ParaView shows it: PD nodes and bonds per node (pre-cracks show as a band
+// of nodes with fewer bonds).
+template <class BondListT>
+std::string writeModelOutput(const std::string& directory, const perishell::model::Model& model,
+                             const BondListT& bonds) {
+  std::filesystem::create_directories(directory);
+  const auto& mesh = model.shell.mesh;
+  Kokkos::View<int*, Kokkos::HostSpace> pdNode("pd-node", mesh.numNodes());
+  Kokkos::View<int*, Kokkos::HostSpace> bondCount("bonds", mesh.numNodes());
+  const auto offsets = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, bonds.offsets);
+  for (std::size_t k = 0; k < model.pdNodes.extent(0); ++k) {
+    pdNode(model.pdNodes(k)) = 1;
+    bondCount(model.pdNodes(k)) = static_cast<int>(offsets(k + 1) - offsets(k));
+  }
+  perishell::io::XdmfTimeSeriesWriter writer(directory, "model", mesh);
+  writer.writeStep(0.0, {perishell::io::makeScalarField("pd-node", pdNode),
+                         perishell::io::makeScalarField("bonds", bondCount)});
+  return writer.xdmfPath();
+}
+
 int runCheck(const std::vector<std::string>& args) {
-  if (args.size() != 1) throw UsageError("'check' takes exactly one deck file");
+  std::string deckPath, outputDirectory;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    if (args[i] == "--output") {
+      if (i + 1 >= args.size()) throw UsageError("option --output needs a directory");
+      outputDirectory = args[++i];
+    } else if (deckPath.empty() && args[i].rfind("--", 0) != 0) {
+      deckPath = args[i];
+    } else {
+      throw UsageError("unexpected argument '" + args[i] + "' for 'check'");
+    }
+  }
+  if (deckPath.empty()) throw UsageError("'check' needs a deck file");
   const auto start = std::chrono::steady_clock::now();
-  const perishell::Deck deck = perishell::readDeck(args[0]);
+  const perishell::Deck deck = perishell::readDeck(deckPath);
   const auto model = perishell::model::buildModel(deck);
   const auto bondStart = std::chrono::steady_clock::now();
   const auto bonds = perishell::model::buildPdBonds(perishell::ExecutionSpace{}, model);
@@ -95,7 +130,7 @@ int runCheck(const std::vector<std::string>& args) {
   const auto end = std::chrono::steady_clock::now();
 
   const auto& mesh = model.shell.mesh;
-  std::printf("perishell %s: check %s\n", perishell::versionString().c_str(), args[0].c_str());
+  std::printf("perishell %s: check %s\n", perishell::versionString().c_str(), deckPath.c_str());
   if (!deck.title.empty()) std::printf("  %-10s %s\n", "title", deck.title.c_str());
   std::printf("  %-10s %s, %s nodes, %s quads, spacing %g m\n", "mesh", generatorName(deck.mesh.generator),
               withThousands(mesh.numNodes()).c_str(), withThousands(mesh.numElements()).c_str(),
@@ -113,6 +148,8 @@ int runCheck(const std::vector<std::string>& args) {
   std::printf("  %-10s %zu supports, %zu loads, %zu curves; %s solver\n", "setup", deck.supports.size(),
               deck.loads.size(), deck.curves.size(),
               deck.solver.type == perishell::deck::SolverType::Explicit ? "explicit" : "implicit");
+  if (!outputDirectory.empty())
+    std::printf("  %-10s %s (pd-node, bonds)\n", "output", writeModelOutput(outputDirectory, model, bonds).c_str());
   for (const auto& warning : deck.warnings) std::printf("  warning: %s\n", warning.c_str());
   std::printf("deck OK (%.3f s)\n", std::chrono::duration<double>(end - start).count());
   return 0;
