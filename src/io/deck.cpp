@@ -560,7 +560,7 @@ std::vector<deck::Load> readLoads(const Section& section) {
   using deck::LoadType;
   std::vector<deck::Load> loads;
   for (const auto& [name, item] : section.namedItems()) {
-    item.allowOnly({"type", "set", "element-set", "vector", "value", "follower", "curve"});
+    item.allowOnly({"type", "set", "element-set", "vector", "moment", "value", "follower", "curve"});
     deck::Load load;
     load.name = name;
     load.type = item.choice<LoadType>("type", {{"point-force", LoadType::PointForce},
@@ -569,9 +569,12 @@ std::vector<deck::Load> readLoads(const Section& section) {
     const std::string typeName = item.text("type");
     switch (load.type) {
       case LoadType::PointForce:
-        item.allowOnly({"type", "set", "vector", "curve"}, "for type point-force");
+        item.allowOnly({"type", "set", "vector", "moment", "curve"}, "for type point-force");
         load.set = item.text("set");
-        load.vector = item.vector3("vector");
+        if (!item.has("vector") && !item.has("moment"))
+          item.fail("", "needs a vector (force [N]), a moment (moment [N m]) or both");
+        if (item.has("vector")) load.vector = item.vector3("vector");
+        if (item.has("moment")) load.moment = item.vector3("moment");
         break;
       case LoadType::EdgeTraction:
         item.allowOnly({"type", "set", "vector", "value", "curve"}, "for type edge-traction");

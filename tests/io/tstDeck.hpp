@@ -257,6 +257,7 @@ perishell:
       type: point-force
       set: tip
       vector: [0, 0, -1800]
+      moment: [0, 25.0, 0]
       curve: later
     shear:
       type: edge-traction
@@ -337,6 +338,7 @@ perishell:
   EXPECT_EQ(deck.loads[0].set, "");  // all elements
   EXPECT_EQ(deck.loads[1].type, deck::LoadType::PointForce);
   EXPECT_EQ(*deck.loads[1].vector, (deck::Vector3{0.0, 0.0, -1800.0}));
+  EXPECT_EQ(*deck.loads[1].moment, (deck::Vector3{0.0, 25.0, 0.0}));
   EXPECT_EQ(deck.loads[2].type, deck::LoadType::EdgeTraction);
   EXPECT_EQ(*deck.loads[2].vector, (deck::Vector3{0.0, 1.0e5, 0.0}));
   EXPECT_EQ(deck.loads[2].curve, "");
@@ -492,6 +494,9 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
        {"key not allowed for solver type implicit", "increments"}},
       {"key of another load type", {{"      value: 1.0e6\n", "      value: 1.0e6\n      set: top\n"}},
        "loads.push.set", {"key not allowed for type pressure", "element-set"}},
+      {"point force with neither force nor moment",
+       {{"      type: pressure\n      value: 1.0e6\n", "      type: point-force\n      set: top\n"}},
+       "loads.push", {"needs a vector (force [N]), a moment (moment [N m]) or both"}},
       {"missing material key", {{"    density: 7850.0\n", ""}}, "material.density", {"missing required key"}},
       {"missing version", {{"  version: 1\n", ""}}, "version", {"missing required key"}},
       {"missing solver", {{"  solver:\n    type: implicit\n    increments: 10\n", ""}}, "solver",

@@ -131,6 +131,7 @@ struct Load {
   // (along the outward in-plane edge normal); pressure: value [Pa] along the element normal.
   std::optional<Vector3> vector;
   std::optional<double> value;
+  std::optional<Vector3> moment;  // point-force: moment on every node of the set [N m]
   bool follower = false;  // pressure only: turns with the element
   std::string curve;      // empty: see docs/deck.md (constant, or the implicit ramp)
 };
