@@ -18,6 +18,7 @@
 #include <limits>
 #include <regex>
 #include <sstream>
+#include <tuple>
 #include <utility>
 
 namespace perishell {
@@ -338,6 +339,17 @@ std::string resolveAgainst(const std::filesystem::path& baseDirectory, const std
 
 // ---------------------------------------------------------------- sections
 
+// An axis-aligned box {min, max} (PD regions, deck node sets).
+std::pair<Vector3, Vector3> readBox(const Section& box) {
+  box.allowOnly({"min", "max"});
+  const Vector3 min = box.vector3("min"), max = box.vector3("max");
+  for (int d = 0; d < 3; ++d)
+    if (max[d] < min[d])
+      box.fail("max", "every component must be >= min's; component " + std::to_string(d) + " is " +
+                          formatNumber(max[d]) + " < " + formatNumber(min[d]));
+  return {min, max};
+}
+
 deck::Mesh readMesh(const Section& section, const std::filesystem::path& baseDirectory) {
   using deck::MeshGenerator;
   const std::vector<std::string> common{"generator", "spacing", "pre-cracks", "node-sets"};
@@ -407,14 +419,8 @@ deck::Mesh readMesh(const Section& section, const std::filesystem::path& baseDir
 
   for (const auto& [name, nodeSet] : section.sublistOrEmpty("node-sets").namedItems()) {
     nodeSet.allowOnly({"box"});
-    const Section box = nodeSet.sublist("box");
-    box.allowOnly({"min", "max"});
-    deck::BoxNodeSet boxSet{name, box.vector3("min"), box.vector3("max")};
-    for (int d = 0; d < 3; ++d)
-      if (boxSet.max[d] < boxSet.min[d])
-        box.fail("max", "every component must be >= min's; component " + std::to_string(d) + " is " +
-                            formatNumber(boxSet.max[d]) + " < " + formatNumber(boxSet.min[d]));
-    mesh.nodeSets.push_back(boxSet);
+    const auto [min, max] = readBox(nodeSet.sublist("box"));
+    mesh.nodeSets.push_back({name, min, max});
   }
   return mesh;
 }
@@ -466,15 +472,8 @@ deck::PdRegion readPdRegion(const std::string& name, const Section& region) {
   result.name = name;
   const Section shape = region.sublist(present.front());
   if (present.front() == "box") {
-    shape.allowOnly({"min", "max"});
     result.shape = deck::RegionShape::Box;
-    result.boxMin = shape.vector3("min");
-    result.boxMax = shape.vector3("max");
-    for (int d = 0; d < 3; ++d)
-      if (result.boxMax[d] < result.boxMin[d])
-        shape.fail("max", "every component must be >= min's; component " + std::to_string(d) +
-                              " is " + formatNumber(result.boxMax[d]) + " < " +
-                              formatNumber(result.boxMin[d]));
+    std::tie(result.boxMin, result.boxMax) = readBox(shape);
   } else if (present.front() == "cylinder") {
     shape.allowOnly({"center", "axis", "radius", "half-length"});
     result.shape = deck::RegionShape::Cylinder;
