@@ -1,0 +1,86 @@
+#pragma once
+// Small fixed-size 3-vector, 3x3 matrix and unit-quaternion helpers for device code.
+// Nodal rotations are finite (model.md §5): each node keeps a unit quaternion, updated
+// multiplicatively by the exponential map of an incremental rotation vector.
+#include <Kokkos_Core.hpp>
+
+namespace perishell::rotation {
+
+KOKKOS_INLINE_FUNCTION double dot(const double a[3], const double b[3]) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+KOKKOS_INLINE_FUNCTION void cross(const double a[3], const double b[3], double out[3]) {
+  out[0] = a[1] * b[2] - a[2] * b[1];
+  out[1] = a[2] * b[0] - a[0] * b[2];
+  out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+KOKKOS_INLINE_FUNCTION double norm(const double a[3]) { return Kokkos::Experimental::sqrt(dot(a, a)); }
+
+// Scales a in place to unit length; returns the length it had.
+KOKKOS_INLINE_FUNCTION double normalise(double a[3]) {
+  const double length = norm(a);
+  for (int k = 0; k < 3; ++k) a[k] /= length;
+  return length;
+}
+
+// out = R a
+KOKKOS_INLINE_FUNCTION void apply(const double R[3][3], const double a[3], double out[3]) {
+  for (int r = 0; r < 3; ++r) out[r] = R[r][0] * a[0] + R[r][1] * a[1] + R[r][2] * a[2];
+}
+
+// Quaternions are (w, x, y, z) with w the scalar part.
+KOKKOS_INLINE_FUNCTION void toMatrix(const double q[4], double R[3][3]) {
+  const double w = q[0], x = q[1], y = q[2], z = q[3];
+  R[0][0] = 1.0 - 2.0 * (y * y + z * z);
+  R[0][1] = 2.0 * (x * y - w * z);
+  R[0][2] = 2.0 * (x * z + w * y);
+  R[1][0] = 2.0 * (x * y + w * z);
+  R[1][1] = 1.0 - 2.0 * (x * x + z * z);
+  R[1][2] = 2.0 * (y * z - w * x);
+  R[2][0] = 2.0 * (x * z - w * y);
+  R[2][1] = 2.0 * (y * z + w * x);
+  R[2][2] = 1.0 - 2.0 * (x * x + y * y);
+}
+
+// The unit quaternion of the rotation vector theta (axis times angle).
+KOKKOS_INLINE_FUNCTION void exponential(const double theta[3], double q[4]) {
+  const double angle = norm(theta);
+  // sin(a/2)/a loses nothing to cancellation at small a when taken from its series.
+  const double halfSincTimesHalf =
+      angle < 1e-4 ? 0.5 - angle * angle / 48.0 : Kokkos::Experimental::sin(0.5 * angle) / angle;
+  q[0] = Kokkos::Experimental::cos(0.5 * angle);
+  for (int k = 0; k < 3; ++k) q[k + 1] = halfSincTimesHalf * theta[k];
+}
+
+// out = a b (apply b first, then a)
+KOKKOS_INLINE_FUNCTION void multiply(const double a[4], const double b[4], double out[4]) {
+  out[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+  out[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+  out[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+  out[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+}
+
+// q <- exp(theta) q, renormalised so that round-off never accumulates into a stretch.
+KOKKOS_INLINE_FUNCTION void rotateBySpatialIncrement(const double theta[3], double q[4]) {
+  double increment[4], updated[4];
+  exponential(theta, increment);
+  multiply(increment, q, updated);
+  const double length = Kokkos::Experimental::sqrt(updated[0] * updated[0] + updated[1] * updated[1] +
+                                                   updated[2] * updated[2] + updated[3] * updated[3]);
+  for (int k = 0; k < 4; ++k) q[k] = updated[k] / length;
+}
+
+// The rotation vector of a rotation matrix (its logarithm), exact for angles below pi:
+// the axial vector of the skew part is sin(angle) axis, the trace gives cos(angle).
+KOKKOS_INLINE_FUNCTION void logarithm(const double R[3][3], double theta[3]) {
+  const double axial[3] = {0.5 * (R[2][1] - R[1][2]), 0.5 * (R[0][2] - R[2][0]), 0.5 * (R[1][0] - R[0][1])};
+  const double sine = norm(axial);
+  const double cosine = 0.5 * (R[0][0] + R[1][1] + R[2][2] - 1.0);
+  const double angle = Kokkos::Experimental::atan2(sine, cosine);
+  const double scale = sine < 1e-8 ? 1.0 + angle * angle / 6.0 : angle / sine;
+  for (int k = 0; k < 3; ++k) theta[k] = scale * axial[k];
+}
+
+}  // namespace perishell::rotation

@@ -1,0 +1,148 @@
+#pragma once
+// The bond force kernel: internal forces and moments of all intact microbeam bonds
+// (model.md §2), energy-based breaking (model.md §3, paper eq. 24-28) and the strain and
+// fracture energies per node. Two mappings of the same physics, selected in the deck
+// (peridynamics.force-kernel), both written once for every Kokkos backend:
+// - BondScatter, the paper's bond mapping: one thread per half bond, both ends' forces
+//   scattered with atomic_add;
+// - NodeGather: one thread per node over its full neighbour row, no atomics; every bond is
+//   evaluated twice, always as (lower, higher) node so both ends see bit-identical results.
+// A bond whose micropotential reaches w_c still acts in this step and is written as broken
+// into intactNext, by exactly one thread (the bond's thread, or the lower node's).
+#include <perishell/io/deck.hpp>
+#include <perishell/pd/pd_body.hpp>
+
+namespace perishell::pd {
+
+// Per-node outputs; forces, strainEnergy and fractureEnergy are accumulated into (the
+// caller zeroes them), strainEnergy may be empty to skip it.
+template <class MemorySpaceT>
+struct BondForceOutputs {
+  NodalVectorView<MemorySpaceT> forces;      // [N, N m]
+  VectorView<MemorySpaceT> strainEnergy;     // [J]; optional
+  VectorView<MemorySpaceT> fractureEnergy;   // [J] released by bonds breaking
+  BondFlagView<MemorySpaceT> intactNext;     // written for every bond
+};
+
+namespace detail {
+
+template <class MemorySpaceT>
+KOKKOS_INLINE_FUNCTION void loadBondEnd(const PdBody<MemorySpaceT>& body, const PdKinematics<MemorySpaceT>& state,
+                                        LocalIndex node, MicrobeamEnd& end) {
+  for (int k = 0; k < 3; ++k) {
+    end.referencePosition[k] = body.referencePositions(node, k);
+    end.position[k] = end.referencePosition[k] + state.displacements(node, k);
+    end.referenceNormal[k] = body.referenceNormals(node, k);
+  }
+  const double q[4] = {state.rotations(node, 0), state.rotations(node, 1), state.rotations(node, 2),
+                       state.rotations(node, 3)};
+  rotation::toMatrix(q, end.rotation);
+}
+
+// V_i V_j beta: the bond's share of the double volume integral (model.md §1-2).
+template <class MemorySpaceT>
+KOKKOS_INLINE_FUNCTION double bondVolumeWeight(const PdBody<MemorySpaceT>& body, LocalIndex i, LocalIndex j,
+                                               RowOffset halfBond) {
+  return body.volumes(i) * body.volumes(j) * body.bonds.volumeFactor(halfBond);
+}
+
+// Symmetric in i and j, so both ends of a bond see the same moduli.
+template <class MemorySpaceT>
+KOKKOS_INLINE_FUNCTION double bondLengthCorrection(const PdBody<MemorySpaceT>& body, LocalIndex i, LocalIndex j) {
+  return 0.5 * (body.correctionLengthWeighted(i) + body.correctionLengthWeighted(j));
+}
+
+template <class MemorySpaceT>
+KOKKOS_INLINE_FUNCTION Micromoduli bondMicromoduli(const PdBody<MemorySpaceT>& body, LocalIndex i, LocalIndex j) {
+  return correctedMicromoduli(body.micromoduli, bondLengthCorrection(body, i, j),
+                              0.5 * (body.correctionInverseLengthWeighted(i) + body.correctionInverseLengthWeighted(j)));
+}
+
+// w_c of model.md §3 scaled like the stretch modulus, so that pure stretch still breaks a
+// bond at exactly s_c and a broken bond releases its corrected share of G_c.
+template <class MemorySpaceT>
+KOKKOS_INLINE_FUNCTION double criticalMicropotential(const PdBody<MemorySpaceT>& body, LocalIndex i, LocalIndex j,
+                                                     double referenceLength) {
+  return body.criticalMicropotentialPerLength * referenceLength * bondLengthCorrection(body, i, j);
+}
+
+}  // namespace detail
+
+template <class ExecutionSpaceT, class MemorySpaceT>
+void computeBondForces(const ExecutionSpaceT& space, deck::ForceKernel kernel, const PdBody<MemorySpaceT>& body,
+                       const PdKinematics<MemorySpaceT>& state, const BondFlagView<MemorySpaceT>& intact,
+                       const BondForceOutputs<MemorySpaceT>& out) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  const bool withStrainEnergy = out.strainEnergy.extent(0) > 0;
+  if (kernel == deck::ForceKernel::BondScatter) {
+    Kokkos::parallel_for(
+        "perishell::pd::computeBondForces::bondScatter",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.bonds.numBonds()), KOKKOS_LAMBDA(const RowOffset b) {
+          const LocalIndex nodes[2] = {body.bonds.halfBonds(b, 0), body.bonds.halfBonds(b, 1)};
+          if (!intact(b)) {
+            out.intactNext(b) = 0;
+            return;
+          }
+          MicrobeamEnd ends[2];
+          detail::loadBondEnd(body, state, nodes[0], ends[0]);
+          detail::loadBondEnd(body, state, nodes[1], ends[1]);
+          const double xi = body.bonds.referenceLength(b);
+          MicrobeamResponse response;
+          evaluateMicrobeam(detail::bondMicromoduli(body, nodes[0], nodes[1]), ends[0], ends[1], xi, response);
+          const double weight = detail::bondVolumeWeight(body, nodes[0], nodes[1], b);
+          const bool breaks = response.micropotential >= detail::criticalMicropotential(body, nodes[0], nodes[1], xi);
+          out.intactNext(b) = breaks ? 0 : 1;
+          const double halfEnergy = 0.5 * weight * response.micropotential;
+          for (int end = 0; end < 2; ++end) {
+            for (int k = 0; k < 3; ++k) {
+              Kokkos::atomic_add(&out.forces(nodes[end], k), weight * response.force[end][k]);
+              Kokkos::atomic_add(&out.forces(nodes[end], 3 + k), weight * response.moment[end][k]);
+            }
+            if (withStrainEnergy) Kokkos::atomic_add(&out.strainEnergy(nodes[end]), halfEnergy);
+            if (breaks) Kokkos::atomic_add(&out.fractureEnergy(nodes[end]), halfEnergy);
+          }
+        });
+    return;
+  }
+  Kokkos::parallel_for(
+      "perishell::pd::computeBondForces::nodeGather",
+      Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numNodes()), KOKKOS_LAMBDA(const LocalIndex node) {
+        MicrobeamEnd self, other;
+        detail::loadBondEnd(body, state, node, self);
+        double sum[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+        double strainEnergy = 0.0, fractureEnergy = 0.0;
+        for (RowOffset entry = body.bonds.offsets(node); entry < body.bonds.offsets(node + 1); ++entry) {
+          const LocalIndex neighbour = body.bonds.neighbours(entry);
+          const RowOffset b = body.bonds.fullToHalf(entry);
+          const bool owner = node < neighbour;
+          if (!intact(b)) {
+            if (owner) out.intactNext(b) = 0;
+            continue;
+          }
+          detail::loadBondEnd(body, state, neighbour, other);
+          const double xi = body.bonds.referenceLength(b);
+          MicrobeamResponse response;
+          const LocalIndex lower = owner ? node : neighbour, higher = owner ? neighbour : node;
+          const Micromoduli c = detail::bondMicromoduli(body, lower, higher);
+          if (owner)
+            evaluateMicrobeam(c, self, other, xi, response);
+          else
+            evaluateMicrobeam(c, other, self, xi, response);
+          const int selfEnd = owner ? 0 : 1;
+          const double weight = detail::bondVolumeWeight(body, lower, higher, b);
+          for (int k = 0; k < 3; ++k) {
+            sum[k] += weight * response.force[selfEnd][k];
+            sum[3 + k] += weight * response.moment[selfEnd][k];
+          }
+          const bool breaks = response.micropotential >= detail::criticalMicropotential(body, lower, higher, xi);
+          if (owner) out.intactNext(b) = breaks ? 0 : 1;
+          strainEnergy += 0.5 * weight * response.micropotential;
+          if (breaks) fractureEnergy += 0.5 * weight * response.micropotential;
+        }
+        for (int k = 0; k < 6; ++k) out.forces(node, k) += sum[k];
+        if (withStrainEnergy) out.strainEnergy(node) += strainEnergy;
+        if (fractureEnergy > 0.0) out.fractureEnergy(node) += fractureEnergy;
+      });
+}
+
+}  // namespace perishell::pd
