@@ -1,0 +1,447 @@
+#pragma once
+// Explicit dynamics of a PD shell body by central differences (model.md §6, paper eq. 44-53),
+// as leapfrog: velocities live at half steps, displacements and forces at whole steps;
+// rotations are finite and updated multiplicatively, q <- exp(dt omega) q (model.md §5).
+// Each step is two kernels, both one thread per node (or per bond): the bond force kernel
+// (pd/bond_forces.hpp) and the nodal update below; all state stays on the device.
+//
+// The run watches itself every monitorEvery steps: the energy balance
+//   kinetic + strain + fracture + damping = initial energy + work of loads and supports
+// must hold (to the scheme's O(dt^2)). A time step above the stability limit makes the
+// highest mode grow by a factor of several per step; its energy then far exceeds the work
+// done on the body, and the run stops with ExplicitInstability instead of producing garbage.
+#include <perishell/fracture/damage.hpp>
+#include <perishell/pd/bond_forces.hpp>
+#include <perishell/solvers/explicit/external_actions.hpp>
+#include <perishell/solvers/explicit/nodal_inertia.hpp>
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace perishell::solvers {
+
+class ExplicitInstability : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct ExplicitOptions {
+  double density = 0.0;    // rho [kg/m^3]
+  double thickness = 0.0;  // t [m]
+  double timeStep = 0.0;   // dt [s]; 0: safetyFactor x the estimated critical step
+  double safetyFactor = 0.9;
+  double damping = 0.0;    // mass-proportional coefficient c [1/s], force -c m v
+  deck::ForceKernel forceKernel = deck::ForceKernel::NodeGather;
+  long long monitorEvery = 100;
+  // Unstable when kinetic + strain + dissipated energy exceeds (1 + this) times the energy
+  // put in; a stable run stays within a few per cent.
+  double energyGrowthLimit = 1.0;
+};
+
+// Energies at one step [J]; the balance error is
+// (kinetic + strain + fracture + damping - input) / max(input, that sum).
+struct EnergyReport {
+  long long step = 0;
+  double time = 0.0;
+  double kinetic = 0.0, strain = 0.0, fracture = 0.0, damping = 0.0;
+  double externalWork = 0.0, supportWork = 0.0, initial = 0.0;
+  double input() const { return initial + externalWork + supportWork; }
+  double stored() const { return kinetic + strain + fracture + damping; }
+  double balanceError() const {
+    const double scale = std::max(std::abs(input()), stored());
+    return scale > 0.0 ? (stored() - input()) / scale : 0.0;
+  }
+};
+
+template <class ExecutionSpaceT>
+class CentralDifferenceSolver {
+ public:
+  using MemorySpace = typename ExecutionSpaceT::memory_space;
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+
+  CentralDifferenceSolver(const ExecutionSpaceT& space, pd::PdBody<MemorySpace> body,
+                          ExternalActions<MemorySpace> actions, const ExplicitOptions& options)
+      : space_(space),
+        body_(std::move(body)),
+        actions_(std::move(actions)),
+        options_(options),
+        state_(body_.numNodes()),
+        velocities_("pd velocities", body_.numNodes()),
+        forces_("pd forces", body_.numNodes()),
+        intact_(pd::makeIntactFlags(body_.bonds, "intact bonds")),
+        intactNext_(pd::makeIntactFlags(body_.bonds, "intact bonds next")),
+        strainEnergy_("pd strain energy", body_.numNodes()),
+        fractureEnergy_("pd fracture energy", body_.numNodes()),
+        externalWork_("pd external work", body_.numNodes()),
+        supportWork_("pd support work", body_.numNodes()),
+        dampingWork_("pd damping work", body_.numNodes()),
+        kineticEnergy_("pd kinetic energy", body_.numNodes()) {
+    validate();
+    inertia_ = computeNodalInertia(space_, body_, options_.density, options_.thickness);
+    applyInitialSupportValues();
+    criticalTimeStep_ = estimateCriticalTimeStep();
+    timeStep_ = options_.timeStep > 0.0 ? options_.timeStep : options_.safetyFactor * criticalTimeStep_;
+  }
+
+  // Sets initial velocities (nodes x 6: translational [m/s] and angular [rad/s]) before the first step.
+  void setInitialVelocities(const pd::NodalVectorView<MemorySpace>& velocities) {
+    if (step_ != 0) throw std::logic_error("initial velocities must be set before the first step");
+    Kokkos::deep_copy(space_, velocities_, velocities);
+  }
+
+  // Advances one step; every monitorEvery steps (and on the first) checks the energy
+  // balance and throws ExplicitInstability on non-finite or runaway energy.
+  void step() {
+    const bool monitor = step_ % options_.monitorEvery == 0;
+    computeForces(monitor);
+    std::swap(intact_, intactNext_);
+    advance(monitor);
+    if (monitor) checkEnergy();
+    ++step_;
+    time_ += timeStep_;
+  }
+
+  // The energies now (one extra force evaluation, no state change).
+  EnergyReport energies() {
+    computeForces(true);
+    return reduceEnergies(kineticAtHalfSteps());
+  }
+
+  long long stepIndex() const { return step_; }
+  double time() const { return time_; }
+  double timeStep() const { return timeStep_; }
+  double criticalTimeStep() const { return criticalTimeStep_; }
+  const EnergyReport& lastEnergyReport() const { return lastReport_; }
+  const pd::PdBody<MemorySpace>& body() const { return body_; }
+  const pd::PdKinematics<MemorySpace>& kinematics() const { return state_; }
+  const pd::NodalVectorView<MemorySpace>& velocities() const { return velocities_; }
+  const pd::NodalVectorView<MemorySpace>& forces() const { return forces_; }
+  const pd::BondFlagView<MemorySpace>& intactBonds() const { return intact_; }
+  const NodalInertia<MemorySpace>& inertia() const { return inertia_; }
+
+  long long brokenBonds() const { return fracture::countBrokenBonds(space_, intact_); }
+  void computeDamage(const VectorView<MemorySpace>& damage) const {
+    fracture::computeDamage(space_, body_, intact_, damage);
+  }
+
+ private:
+  void validate() const {
+    if (!(options_.density > 0.0)) throw std::invalid_argument("explicit solver: density must be > 0");
+    if (!(options_.thickness > 0.0)) throw std::invalid_argument("explicit solver: thickness must be > 0");
+    if (options_.monitorEvery < 1) throw std::invalid_argument("explicit solver: monitorEvery must be >= 1");
+    if (actions_.numPatterns() > maxCurvesPerKind ||
+        static_cast<int>(actions_.supportCurves.size()) > maxCurvesPerKind)
+      throw std::invalid_argument("explicit solver: at most " + std::to_string(maxCurvesPerKind) +
+                                  " distinct load curves and support curves each");
+    if (body_.bonds.numBonds() == 0) throw std::invalid_argument("explicit solver: the PD body has no bonds");
+    double smallestVolume = 0.0;
+    const auto volumes = body_.volumes;
+    Kokkos::parallel_reduce(
+        "perishell::solvers::CentralDifferenceSolver::smallestVolume",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, body_.numNodes()),
+        KOKKOS_LAMBDA(const LocalIndex node, double& smallest) {
+          if (!(volumes(node) >= smallest)) smallest = volumes(node);
+        },
+        Kokkos::Min<double>(smallestVolume));
+    if (!(smallestVolume > 0.0))
+      throw std::invalid_argument("explicit solver: a PD node has zero (or non-finite) volume");
+  }
+
+  // Prescribed values hold from t = 0 on: u_0 = value x curve(0).
+  void applyInitialSupportValues() {
+    const CurveFactors factors = actions_.supportFactors(0.0);
+    const auto constrained = actions_.constrainedDofs;
+    const auto value = actions_.prescribedValue;
+    const auto curveIndex = actions_.supportCurveIndex;
+    const auto displacements = state_.displacements;
+    const auto rotations = state_.rotations;
+    Kokkos::parallel_for(
+        "perishell::solvers::CentralDifferenceSolver::initialSupportValues",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, body_.numNodes()), KOKKOS_LAMBDA(const LocalIndex node) {
+          double initial[6];
+          for (int d = 0; d < 6; ++d) {
+            const int curve = curveIndex(node, d);
+            const bool prescribed = (constrained(node) >> d) & 1;
+            initial[d] = prescribed ? value(node, d) * (curve < 0 ? 1.0 : factors.values[curve]) : 0.0;
+          }
+          for (int k = 0; k < 3; ++k) displacements(node, k) = initial[k];
+          double q[4] = {1.0, 0.0, 0.0, 0.0};
+          rotation::rotateBySpatialIncrement(initial + 3, q);
+          for (int k = 0; k < 4; ++k) rotations(node, k) = q[k];
+        });
+  }
+
+  void computeForces(bool withStrainEnergy) {
+    Kokkos::deep_copy(space_, forces_, 0.0);
+    if (withStrainEnergy) Kokkos::deep_copy(space_, strainEnergy_, 0.0);
+    const pd::BondForceOutputs<MemorySpace> outputs{
+        forces_, withStrainEnergy ? strainEnergy_ : VectorView<MemorySpace>(), fractureEnergy_, intactNext_};
+    pd::computeBondForces(space_, options_.forceKernel, body_, state_, intact_, outputs);
+  }
+
+  // The leapfrog update of one node's six DOFs; work and dissipation accumulate per node
+  // (no reduction on the hot path) with the trapezoidal displacement dt (v_old + v_new)/2.
+  void advance(bool monitor) {
+    const bool firstStep = step_ == 0;
+    const double dt = timeStep_;
+    const double velocityStep = firstStep ? 0.5 * dt : dt;  // v_{1/2} = v_0 + dt/2 a_0
+    const double damping = options_.damping;
+    const CurveFactors loadFactors = actions_.loadFactors(time_);
+    const CurveFactors supportNow = actions_.supportFactors(time_);
+    const CurveFactors supportNext = actions_.supportFactors(time_ + dt);
+    const int numPatterns = actions_.numPatterns();
+    const auto loads = actions_.loadPatterns;
+    const auto constrained = actions_.constrainedDofs;
+    const auto value = actions_.prescribedValue;
+    const auto curveIndex = actions_.supportCurveIndex;
+    const auto mass = inertia_.mass, rotaryInertia = inertia_.rotaryInertia;
+    const auto forces = forces_, velocities = velocities_;
+    const auto displacements = state_.displacements;
+    const auto rotations = state_.rotations;
+    const auto externalWork = externalWork_, supportWork = supportWork_, dampingWork = dampingWork_;
+    const auto kinetic = kineticEnergy_;
+    Kokkos::parallel_for(
+        "perishell::solvers::CentralDifferenceSolver::advance",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, body_.numNodes()), KOKKOS_LAMBDA(const LocalIndex node) {
+          double external = 0.0, support = 0.0, dissipated = 0.0, kineticNode = 0.0;
+          double newVelocity[6];
+          for (int d = 0; d < 6; ++d) {
+            const double inertiaD = d < 3 ? mass(node) : rotaryInertia(node);
+            double loadD = 0.0;
+            for (int p = 0; p < numPatterns; ++p) loadD += loadFactors.values[p] * loads(node, 6 * p + d);
+            const double oldV = velocities(node, d);
+            double newV;
+            if ((constrained(node) >> d) & 1) {
+              const int curve = curveIndex(node, d);
+              const double change = curve < 0 ? 0.0 : supportNext.values[curve] - supportNow.values[curve];
+              newV = value(node, d) * change / dt;
+              const double reaction = inertiaD * (newV - oldV) / velocityStep - forces(node, d) - loadD;
+              support += reaction * 0.5 * dt * (oldV + newV);
+            } else {
+              newV = oldV + velocityStep * ((forces(node, d) + loadD) / inertiaD - damping * oldV);
+              dissipated += damping * inertiaD * oldV * 0.5 * dt * (oldV + newV);
+            }
+            external += loadD * 0.5 * dt * (oldV + newV);
+            // Leapfrog's conserved kinetic energy at step n is m v_{n-1/2} v_{n+1/2} / 2.
+            kineticNode += 0.5 * inertiaD * (firstStep ? oldV * oldV : oldV * newV);
+            newVelocity[d] = newV;
+          }
+          for (int d = 0; d < 6; ++d) velocities(node, d) = newVelocity[d];
+          for (int k = 0; k < 3; ++k) displacements(node, k) += dt * newVelocity[k];
+          const double spin[3] = {dt * newVelocity[3], dt * newVelocity[4], dt * newVelocity[5]};
+          double q[4] = {rotations(node, 0), rotations(node, 1), rotations(node, 2), rotations(node, 3)};
+          rotation::rotateBySpatialIncrement(spin, q);
+          for (int k = 0; k < 4; ++k) rotations(node, k) = q[k];
+          externalWork(node) += external;
+          supportWork(node) += support;
+          dampingWork(node) += dissipated;
+          if (monitor) kinetic(node) = kineticNode;
+        });
+  }
+
+  // Kinetic energy from the stored half-step velocities alone (between steps).
+  VectorView<MemorySpace> kineticAtHalfSteps() {
+    const auto mass = inertia_.mass, rotaryInertia = inertia_.rotaryInertia;
+    const auto velocities = velocities_;
+    const auto kinetic = kineticEnergy_;
+    Kokkos::parallel_for(
+        "perishell::solvers::CentralDifferenceSolver::kineticAtHalfSteps",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, body_.numNodes()), KOKKOS_LAMBDA(const LocalIndex node) {
+          double sum = 0.0;
+          for (int d = 0; d < 6; ++d)
+            sum += 0.5 * (d < 3 ? mass(node) : rotaryInertia(node)) * velocities(node, d) * velocities(node, d);
+          kinetic(node) = sum;
+        });
+    return kinetic;
+  }
+
+  EnergyReport reduceEnergies(const VectorView<MemorySpace>& kinetic) {
+    EnergyReport report;
+    report.step = step_;
+    report.time = time_;
+    report.initial = initialEnergy_;
+    const auto displacements = state_.displacements;
+    int nonFinite = 0;
+    Kokkos::parallel_reduce(
+        "perishell::solvers::CentralDifferenceSolver::countNonFinite",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, body_.numNodes()),
+        KOKKOS_LAMBDA(const LocalIndex node, int& count) {
+          for (int k = 0; k < 3; ++k) count += Kokkos::Experimental::isfinite(displacements(node, k)) ? 0 : 1;
+        },
+        nonFinite);
+    const double sums[6] = {sum(kinetic), sum(strainEnergy_), sum(fractureEnergy_),
+                            sum(externalWork_), sum(supportWork_), sum(dampingWork_)};
+    report.kinetic = sums[0];
+    report.strain = sums[1];
+    report.fracture = sums[2];
+    report.externalWork = sums[3];
+    report.supportWork = sums[4];
+    report.damping = sums[5];
+    nonFinite_ = nonFinite > 0 || !std::isfinite(report.stored()) || !std::isfinite(report.input());
+    return report;
+  }
+
+  void checkEnergy() {
+    lastReport_ = reduceEnergies(kineticEnergy_);
+    if (step_ == 0) {
+      initialEnergy_ = lastReport_.stored();
+      lastReport_.initial = initialEnergy_;
+    }
+    const bool runaway = lastReport_.stored() > (1.0 + options_.energyGrowthLimit) * std::abs(lastReport_.input()) &&
+                         lastReport_.stored() > 0.0 && step_ > 0;
+    if (!nonFinite_ && !runaway) return;
+    std::ostringstream message;
+    message.precision(4);
+    message << "explicit solver: unstable at step " << step_ << " (t = " << time_ << " s): ";
+    if (nonFinite_)
+      message << "the state is no longer finite";
+    else
+      message << "the stored energy " << lastReport_.stored() << " J exceeds the work done on the body "
+              << lastReport_.input() << " J";
+    message << "; dt = " << timeStep_ << " s against an estimated critical step of " << criticalTimeStep_
+            << " s (ratio " << timeStep_ / criticalTimeStep_ << "). Reduce solver.dt or leave it out to use "
+            << "safety-factor x the estimate.";
+    throw ExplicitInstability(message.str());
+  }
+
+  // dt_crit = 2 / omega_max, omega_max^2 the largest eigenvalue of M^-1/2 K M^-1/2 with K the
+  // tangent of the bond forces at the reference state. Power iteration: each product is a
+  // bond force evaluation at a tiny trial state y/sqrt(M) (amplitude 1e-7 of the horizon),
+  // the Rayleigh quotient approaches omega_max^2 from below and converges fast because the
+  // top of a lattice spectrum is dense.
+  double estimateCriticalTimeStep(int iterations = 80) {
+    const LocalIndex numNodes = body_.numNodes();
+    pd::NodalVectorView<MemorySpace> direction("power iteration direction", numNodes);
+    pd::PdKinematics<MemorySpace> trial(numNodes);
+    pd::NodalVectorView<MemorySpace> trialForces("power iteration forces", numNodes);
+    VectorView<MemorySpace> scratchEnergy("power iteration fracture energy", numNodes);
+    auto scratchIntact = pd::makeIntactFlags(body_.bonds, "power iteration bonds");
+    const auto constrained = actions_.constrainedDofs;
+    const auto mass = inertia_.mass, rotaryInertia = inertia_.rotaryInertia;
+    Kokkos::parallel_for(
+        "perishell::solvers::CentralDifferenceSolver::powerIterationStart",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes), KOKKOS_LAMBDA(const LocalIndex node) {
+          for (int d = 0; d < 6; ++d) {
+            // A fixed pseudo-random start with components along every mode.
+            unsigned hash = 2654435761u * static_cast<unsigned>(6 * node + d + 1);
+            hash ^= hash >> 16;
+            hash *= 2246822519u;
+            hash ^= hash >> 13;
+            direction(node, d) = ((constrained(node) >> d) & 1) ? 0.0 : (hash % 2001u) / 1000.0 - 1.0;
+          }
+        });
+    const double amplitude = 1e-7;
+    const double horizonLength = maxReferenceLength();
+    double eigenvalue = 0.0;
+    for (int iteration = 0; iteration < iterations; ++iteration) {
+      // Scale so that the largest trial displacement is amplitude x horizon, the largest rotation amplitude.
+      double largest = 0.0;
+      Kokkos::parallel_reduce(
+          "perishell::solvers::CentralDifferenceSolver::powerIterationScale",
+          Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes),
+          KOKKOS_LAMBDA(const LocalIndex node, double& maximum) {
+            for (int d = 0; d < 6; ++d) {
+              const double physical = Kokkos::Experimental::fabs(direction(node, d)) /
+                                      Kokkos::Experimental::sqrt(d < 3 ? mass(node) : rotaryInertia(node)) /
+                                      (d < 3 ? horizonLength : 1.0);
+              if (physical > maximum) maximum = physical;
+            }
+          },
+          Kokkos::Max<double>(largest));
+      if (!(largest > 0.0)) throw std::invalid_argument("explicit solver: every DOF is prescribed");
+      const double epsilon = amplitude / largest;
+      Kokkos::parallel_for(
+          "perishell::solvers::CentralDifferenceSolver::powerIterationTrial",
+          Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes), KOKKOS_LAMBDA(const LocalIndex node) {
+            for (int k = 0; k < 3; ++k) trial.displacements(node, k) = epsilon * direction(node, k) / Kokkos::Experimental::sqrt(mass(node));
+            const double spin[3] = {epsilon * direction(node, 3) / Kokkos::Experimental::sqrt(rotaryInertia(node)),
+                                    epsilon * direction(node, 4) / Kokkos::Experimental::sqrt(rotaryInertia(node)),
+                                    epsilon * direction(node, 5) / Kokkos::Experimental::sqrt(rotaryInertia(node))};
+            double q[4] = {1.0, 0.0, 0.0, 0.0};
+            rotation::rotateBySpatialIncrement(spin, q);
+            for (int k = 0; k < 4; ++k) trial.rotations(node, k) = q[k];
+          });
+      Kokkos::deep_copy(space_, trialForces, 0.0);
+      const pd::BondForceOutputs<MemorySpace> outputs{trialForces, VectorView<MemorySpace>(), scratchEnergy, scratchIntact};
+      pd::computeBondForces(space_, options_.forceKernel, body_, trial, intact_, outputs);
+      // product = M^-1/2 K M^-1/2 direction = -M^-1/2 f / epsilon; Rayleigh quotient and next direction.
+      Kokkos::parallel_for(
+          "perishell::solvers::CentralDifferenceSolver::powerIterationProduct",
+          Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes), KOKKOS_LAMBDA(const LocalIndex node) {
+            for (int d = 0; d < 6; ++d)
+              trialForces(node, d) = ((constrained(node) >> d) & 1)
+                                         ? 0.0
+                                         : -trialForces(node, d) /
+                                               (epsilon * Kokkos::Experimental::sqrt(d < 3 ? mass(node) : rotaryInertia(node)));
+          });
+      const double rayleigh = dot(trialForces, direction);
+      const double productNormSquared = dot(trialForces, trialForces);
+      const double directionNormSquared = dot(direction, direction);
+      eigenvalue = rayleigh / directionNormSquared;
+      const double scale = 1.0 / std::sqrt(productNormSquared);
+      Kokkos::parallel_for(
+          "perishell::solvers::CentralDifferenceSolver::powerIterationNext",
+          Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes), KOKKOS_LAMBDA(const LocalIndex node) {
+            for (int d = 0; d < 6; ++d) direction(node, d) = scale * trialForces(node, d);
+          });
+    }
+    if (!(eigenvalue > 0.0) || !std::isfinite(eigenvalue))
+      throw std::runtime_error("explicit solver: the critical time step estimate failed (largest eigenvalue " +
+                               std::to_string(eigenvalue) + ")");
+    return 2.0 / std::sqrt(eigenvalue);
+  }
+
+  double sum(const VectorView<MemorySpace>& values) const {
+    double total = 0.0;
+    Kokkos::parallel_reduce(
+        "perishell::solvers::CentralDifferenceSolver::sum", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, values.extent(0)),
+        KOKKOS_LAMBDA(const std::size_t i, double& partial) { partial += values(i); }, total);
+    return total;
+  }
+
+  double dot(const pd::NodalVectorView<MemorySpace>& a, const pd::NodalVectorView<MemorySpace>& b) const {
+    double total = 0.0;
+    Kokkos::parallel_reduce(
+        "perishell::solvers::CentralDifferenceSolver::dot", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, a.extent(0)),
+        KOKKOS_LAMBDA(const std::size_t node, double& partial) {
+          for (int d = 0; d < 6; ++d) partial += a(node, d) * b(node, d);
+        },
+        total);
+    return total;
+  }
+
+  double maxReferenceLength() const {
+    double longest = 0.0;
+    const auto lengths = body_.bonds.referenceLength;
+    Kokkos::parallel_reduce(
+        "perishell::solvers::CentralDifferenceSolver::longestBond",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, lengths.extent(0)),
+        KOKKOS_LAMBDA(const RowOffset b, double& maximum) {
+          if (lengths(b) > maximum) maximum = lengths(b);
+        },
+        Kokkos::Max<double>(longest));
+    return longest;
+  }
+
+  ExecutionSpaceT space_;
+  pd::PdBody<MemorySpace> body_;
+  ExternalActions<MemorySpace> actions_;
+  ExplicitOptions options_;
+  pd::PdKinematics<MemorySpace> state_;
+  pd::NodalVectorView<MemorySpace> velocities_;
+  pd::NodalVectorView<MemorySpace> forces_;
+  pd::BondFlagView<MemorySpace> intact_, intactNext_;
+  VectorView<MemorySpace> strainEnergy_, fractureEnergy_, externalWork_, supportWork_, dampingWork_, kineticEnergy_;
+  NodalInertia<MemorySpace> inertia_;
+  double criticalTimeStep_ = 0.0;
+  double timeStep_ = 0.0;
+  double time_ = 0.0;
+  long long step_ = 0;
+  double initialEnergy_ = 0.0;
+  bool nonFinite_ = false;
+  EnergyReport lastReport_;
+};
+
+}  // namespace perishell::solvers
