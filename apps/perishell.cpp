@@ -4,6 +4,7 @@
 #include <perishell/core/runtime.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/model.hpp>
+#include <perishell/solvers/explicit/explicit_run.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -18,10 +19,17 @@
 namespace {
 
 constexpr const char* usage = R"(usage: perishell [--help] [--version] [--backend-info]
+       perishell run DECK.yaml [--output DIR]
        perishell check DECK.yaml [--output DIR]
        perishell membrane [options]
 
 Commands:
+  run DECK        Run a case deck: build the model, run its solver on the build's default
+                  device with progress lines (step, time, ETA), write DIR/results.xmf (+ .h5
+                  per output step) and DIR/history.csv, and print a summary table.
+                  DIR is output.directory of the deck unless --output DIR is given. Explicit
+                  decks (100 % PD) run; implicit decks are refused until that solver lands.
+                  Exit 1 with the reason on a bad deck or an unstable run.
   check DECK      Validate a case deck (docs/deck.md), build its model — mesh, zones, PD
                   nodes and, on the device, the bonds — and print a model summary: nodes,
                   elements, PD ratio, bonds, DOF counts. Exit 1 with the deck key and the
@@ -108,19 +116,29 @@ std::string writeModelOutput(const std::string& directory, const perishell::mode
   return writer.xdmfPath();
 }
 
-int runCheck(const std::vector<std::string>& args) {
+// DECK [--output DIR] for the run and check commands.
+struct DeckArguments {
   std::string deckPath, outputDirectory;
+};
+
+DeckArguments parseDeckArguments(const std::string& command, const std::vector<std::string>& args) {
+  DeckArguments parsed;
   for (std::size_t i = 0; i < args.size(); ++i) {
     if (args[i] == "--output") {
       if (i + 1 >= args.size()) throw UsageError("option --output needs a directory");
-      outputDirectory = args[++i];
-    } else if (deckPath.empty() && args[i].rfind("--", 0) != 0) {
-      deckPath = args[i];
+      parsed.outputDirectory = args[++i];
+    } else if (parsed.deckPath.empty() && args[i].rfind("--", 0) != 0) {
+      parsed.deckPath = args[i];
     } else {
-      throw UsageError("unexpected argument '" + args[i] + "' for 'check'");
+      throw UsageError("unexpected argument '" + args[i] + "' for '" + command + "'");
     }
   }
-  if (deckPath.empty()) throw UsageError("'check' needs a deck file");
+  if (parsed.deckPath.empty()) throw UsageError("'" + command + "' needs a deck file");
+  return parsed;
+}
+
+int runCheck(const std::vector<std::string>& args) {
+  const auto [deckPath, outputDirectory] = parseDeckArguments("check", args);
   const auto start = std::chrono::steady_clock::now();
   const perishell::Deck deck = perishell::readDeck(deckPath);
   const auto model = perishell::model::buildModel(deck);
@@ -152,6 +170,26 @@ int runCheck(const std::vector<std::string>& args) {
     std::printf("  %-10s %s (pd-node, bonds)\n", "output", writeModelOutput(outputDirectory, model, bonds).c_str());
   for (const auto& warning : deck.warnings) std::printf("  warning: %s\n", warning.c_str());
   std::printf("deck OK (%.3f s)\n", std::chrono::duration<double>(end - start).count());
+  return 0;
+}
+
+int runDeck(const std::vector<std::string>& args) {
+  const auto parsed = parseDeckArguments("run", args);
+  const perishell::Deck deck = perishell::readDeck(parsed.deckPath);
+  std::printf("perishell %s: run %s\n", perishell::versionString().c_str(), parsed.deckPath.c_str());
+  if (!deck.title.empty()) std::printf("  %-10s %s\n", "title", deck.title.c_str());
+  for (const auto& warning : deck.warnings) std::printf("  warning: %s\n", warning.c_str());
+  if (deck.solver.type != perishell::deck::SolverType::Explicit)
+    throw std::invalid_argument(deck.sourceName +
+                                ": solver.type: the implicit solver is not available yet; 'perishell check' "
+                                "validates this deck");
+  const auto model = perishell::model::buildModel(deck);
+  std::printf("  %-10s %s nodes, %s quads, PD ratio %.1f %%, %s free DOF\n", "model",
+              withThousands(model.shell.mesh.numNodes()).c_str(),
+              withThousands(model.shell.mesh.numElements()).c_str(), 100.0 * model.pdRatio(),
+              withThousands(model.freeDofCount()).c_str());
+  std::fflush(stdout);
+  perishell::solvers::runExplicit(model, parsed.outputDirectory, std::cout);
   return 0;
 }
 
@@ -231,6 +269,7 @@ int main(int argc, char* argv[]) {
       perishell::printBackendInfo(std::cout);
       return 0;
     }
+    if (args[0] == "run") return runDeck({args.begin() + 1, args.end()});
     if (args[0] == "check") return runCheck({args.begin() + 1, args.end()});
     if (args[0] == "membrane") return runMembrane({args.begin() + 1, args.end()});
     throw UsageError("unknown command '" + args[0] + "'");

@@ -695,12 +695,15 @@ deck::Solver readSolver(const Section& section) {
 }
 
 deck::Output readOutput(const Section& section, const std::filesystem::path& baseDirectory) {
-  section.allowOnly({"directory", "every", "fields", "history"});
+  section.allowOnly({"directory", "every", "history-every", "fields", "history"});
   deck::Output output;
   output.directory = resolveAgainst(baseDirectory, section.text("directory", output.directory));
   output.every = section.integer("every", output.every);
   if (output.every < 0)
     section.fail("every", "must be >= 0 (0 writes the final state only), got " + std::to_string(output.every));
+  output.historyEvery = section.integer("history-every", output.every > 0 ? output.every : 100);
+  if (output.historyEvery < 1)
+    section.fail("history-every", "must be >= 1, got " + std::to_string(output.historyEvery));
   if (section.has("fields"))
     output.fields = readDistinct<deck::OutputField>(
         section, "fields",
@@ -712,7 +715,7 @@ deck::Output readOutput(const Section& section, const std::filesystem::path& bas
         section, "history",
         {{"energy", deck::HistoryQuantity::Energy}, {"reactions", deck::HistoryQuantity::Reactions},
          {"broken-bonds", deck::HistoryQuantity::BrokenBonds},
-         {"crack-tip", deck::HistoryQuantity::CrackTip}});
+         {"crack-tip", deck::HistoryQuantity::CrackTip}, {"load-points", deck::HistoryQuantity::LoadPoints}});
   return output;
 }
 

@@ -91,18 +91,11 @@ void addDeckNodeSets(const Deck& deck, mesh::ShellMesh& shell) {
 // Nodes of a support's or load's set: a node set, or the nodes of an edge set.
 std::vector<LocalIndex> nodesOfSet(const Deck& deck, const mesh::MeshSets& sets, const std::string& name,
                                    const std::string& keyPath) {
-  if (const auto found = sets.nodeSets.find(name); found != sets.nodeSets.end()) return found->second;
-  if (const auto found = sets.edgeSets.find(name); found != sets.edgeSets.end()) {
-    std::set<LocalIndex> nodes;
-    for (const auto& [first, second] : found->second) nodes.insert({first, second});
-    return {nodes.begin(), nodes.end()};
-  }
   try {
-    sets.nodeSet(name);  // throws, listing the node sets that exist
+    return sets.nodesOfNodeOrEdgeSet(name);
   } catch (const std::invalid_argument& error) {
     fail(deck, keyPath, error.what());
   }
-  fail(deck, keyPath, "unknown set '" + name + "'");
 }
 
 void checkSetReferences(const Deck& deck, const mesh::MeshSets& sets, long long& constrainedDofs) {

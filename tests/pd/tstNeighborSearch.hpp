@@ -223,15 +223,16 @@ TEST(TEST_CATEGORY, bond_list_precracks_remove_crossing_bonds_only) {
   const std::vector<perishell::mesh::CrackSegment> cracks = {
       {{-dx, edgeY, 0.0}, {edgeTip, edgeY, 0.0}, {0.0, 0.0, 1.0}},
       {{columnX, columnLow, 0.0}, {columnX, columnHigh, 0.0}, {0.0, 0.0, 1.0}}};
-  // The same rule written for these two lines in the plane: end points strictly on
-  // opposite sides, crossing point within the segment.
+  // The same rule written for these two lines in the plane: end points on opposite sides
+  // (a node on the line counts as the positive side: above y, right of x), crossing point
+  // within the segment.
   const Cut crossesACrack = [&](const HostPositions& p, int i, int j) {
     const double xi = p(i, 0), yi = p(i, 1), xj = p(j, 0), yj = p(j, 1);
     if ((yi - edgeY) * (yj - edgeY) < 0.0) {
       const double crossingX = xi + (xj - xi) * (edgeY - yi) / (yj - yi);
       if (crossingX >= -dx && crossingX <= edgeTip) return true;
     }
-    if ((xi - columnX) * (xj - columnX) < 0.0) {
+    if ((xi - columnX >= 0.0) != (xj - columnX >= 0.0)) {
       const double crossingY = yi + (yj - yi) * (columnX - xi) / (xj - xi);
       if (crossingY >= columnLow && crossingY <= columnHigh) return true;
     }
@@ -254,8 +255,9 @@ TEST(TEST_CATEGORY, bond_list_precracks_remove_crossing_bonds_only) {
   EXPECT_TRUE(hasBond(bonds, node(16, 9), node(16, 10)));
   EXPECT_TRUE(hasBond(bonds, node(14, 9), node(14, 8)));    // same side
   EXPECT_FALSE(hasBond(bonds, node(19, 5), node(21, 5)));   // through the column crack
-  EXPECT_TRUE(hasBond(bonds, node(19, 5), node(20, 5)));    // end point on the crack plane
-  EXPECT_TRUE(hasBond(bonds, node(20, 5), node(21, 5)));
+  EXPECT_FALSE(hasBond(bonds, node(19, 5), node(20, 5)));   // node on the crack: positive side
+  EXPECT_TRUE(hasBond(bonds, node(20, 5), node(21, 5)));    // both on the positive side
+  EXPECT_TRUE(hasBond(bonds, node(20, 4), node(20, 6)));    // along the crack
   EXPECT_TRUE(hasBond(bonds, node(19, 13), node(21, 13)));  // above the column crack's end
   EXPECT_FALSE(hasBond(bonds, node(19, 12), node(21, 12)));
 }

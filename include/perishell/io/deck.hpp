@@ -172,11 +172,12 @@ struct Solver {
 };
 
 enum class OutputField { Displacement, Rotation, Velocity, Damage, Zone };
-enum class HistoryQuantity { Energy, Reactions, BrokenBonds, CrackTip };
+enum class HistoryQuantity { Energy, Reactions, BrokenBonds, CrackTip, LoadPoints };
 
 struct Output {
   std::string directory = "output";  // resolved against the deck's directory
   long long every = 0;               // steps or increments between writes; 0: the final state only
+  long long historyEvery = 100;      // steps or increments between history rows; default: every (100 if 0)
   std::vector<OutputField> fields{OutputField::Displacement, OutputField::Damage};
   std::vector<HistoryQuantity> history;
 };

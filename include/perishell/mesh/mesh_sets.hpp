@@ -5,6 +5,7 @@
 // has the shell on its left when seen against the node normal. Host data, built once.
 #include <perishell/mesh/quad_mesh.hpp>
 
+#include <algorithm>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -29,6 +30,19 @@ struct MeshSets {
   }
   const std::vector<MeshEdge>& edgeSet(const std::string& name) const {
     return lookup(edgeSets, "edge", name);
+  }
+  // The nodes of a node set, or of an edge set (sorted, unique): what point loads and
+  // supports act on. Throws std::invalid_argument, listing the node sets, for other names.
+  std::vector<LocalIndex> nodesOfNodeOrEdgeSet(const std::string& name) const {
+    if (const auto found = nodeSets.find(name); found != nodeSets.end()) return found->second;
+    if (const auto found = edgeSets.find(name); found != edgeSets.end()) {
+      std::vector<LocalIndex> nodes;
+      for (const auto& [first, second] : found->second) nodes.insert(nodes.end(), {first, second});
+      std::sort(nodes.begin(), nodes.end());
+      nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+      return nodes;
+    }
+    return nodeSet(name);
   }
 
  private:

@@ -1,8 +1,8 @@
 #pragma once
 // Whether the bond a-b crosses a pre-crack, by the rule of mesh/crack_segment.hpp: the end
-// points lie strictly on opposite sides of the plane through `start` with normal
-// (end - start) x normal (an end point on the plane does not cross), and the crossing point
-// P = start + s (end - start) + r normal has s in [0, 1]. Callers pass the end points in a
+// points lie on opposite sides of the plane through `start` with normal
+// (end - start) x normal, a point on the plane counting as the positive side, and the
+// crossing point P = start + s (end - start) + r normal has s in [0, 1]. Callers pass the end points in a
 // fixed order (lower node index first) so that the answer is the same from both ends.
 #include <perishell/mesh/crack_segment.hpp>
 
@@ -27,7 +27,9 @@ KOKKOS_INLINE_FUNCTION bool bondCrossesCrack(const double a[3], const double b[3
                                  along[0] * normal[1] - along[1] * normal[0]};
   const double sideA = dot3(toA, planeNormal);
   const double sideB = dot3(toB, planeNormal);
-  if (!((sideA < 0.0 && sideB > 0.0) || (sideA > 0.0 && sideB < 0.0))) return false;
+  // A crack laid along a row of nodes must separate them from one side, or that row would
+  // bridge the crack; so the plane itself belongs to the positive side.
+  if ((sideA >= 0.0) == (sideB >= 0.0)) return false;
   const double t = sideA / (sideA - sideB);
   double toCrossing[3];
   for (int d = 0; d < 3; ++d) toCrossing[d] = toA[d] + t * (toB[d] - toA[d]);

@@ -1,0 +1,27 @@
+#pragma once
+// `perishell run` for an explicit deck: model -> PD body and loads on the device ->
+// central-difference steps with progress -> XDMF fields every output.every steps and a CSV
+// history every output.history-every steps -> a summary table. Runs on the build's default
+// execution space; only output steps copy data to the host.
+#include <perishell/model/model.hpp>
+
+#include <iosfwd>
+#include <string>
+
+namespace perishell::solvers {
+
+struct ExplicitRunSummary {
+  long long steps = 0;
+  double timeStep = 0.0, criticalTimeStep = 0.0;  // [s]
+  double endTime = 0.0;                           // [s]
+  double wallSeconds = 0.0;
+  long long brokenBonds = 0;
+  std::string xdmfPath, historyPath;
+};
+
+// Throws std::invalid_argument (naming the deck key) for models the explicit solver cannot
+// run yet, ExplicitInstability when the run goes unstable (files written up to then stay
+// valid), std::runtime_error for output failures.
+ExplicitRunSummary runExplicit(const model::Model& model, const std::string& outputDirectory, std::ostream& log);
+
+}  // namespace perishell::solvers

@@ -1,0 +1,336 @@
+#include <perishell/io/csv_history.hpp>
+#include <perishell/io/progress.hpp>
+#include <perishell/io/xdmf_writer.hpp>
+#include <perishell/model/nodal_loads.hpp>
+#include <perishell/pd/make_body.hpp>
+#include <perishell/solvers/explicit/central_difference.hpp>
+#include <perishell/solvers/explicit/explicit_run.hpp>
+
+#include <algorithm>
+#include <array>
+#include <optional>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <ostream>
+#include <sstream>
+
+namespace perishell::solvers {
+namespace {
+
+using Memory = MemorySpace;
+using HostVector3 = Kokkos::View<double* [3], Kokkos::LayoutRight, Kokkos::HostSpace>;
+
+// A node is on the crack when it has lost this share of its neighbour volume (docs/deck.md).
+constexpr double crackDamage = 0.4;
+
+void requireRunnableModel(const model::Model& model) {
+  const auto& deck = model.deck;
+  if (model.numPdElements != model.shell.mesh.numElements())
+    throw std::invalid_argument(
+        deck.sourceName + ": zones: the explicit solver needs every element PD (zones.default: pd, no CCM "
+        "regions); this model has " + std::to_string(model.shell.mesh.numElements() - model.numPdElements) +
+        " CCM elements, and mixed PD-CCM models arrive with the coupling");
+  for (const auto& load : deck.loads)
+    if (load.follower)
+      throw std::invalid_argument(deck.sourceName + ": loads." + load.name +
+                                  ".follower: the explicit solver applies pressure in the reference direction "
+                                  "only; set follower: false");
+}
+
+std::optional<deck::Curve> curveNamed(const Deck& deck, const std::string& name) {
+  if (name.empty()) return std::nullopt;
+  return *deck.findCurve(name);
+}
+
+ExternalActions<Memory> makeActions(const model::Model& model) {
+  const auto loads = model::buildNodalLoads(model);
+  const auto supports = model::buildSupportConditions(model);
+  const LocalIndex numNodes = model.shell.mesh.numNodes();
+  ExternalActions<Memory> actions;
+  Kokkos::View<double**, Kokkos::LayoutRight, Kokkos::HostSpace> patterns("load patterns", numNodes,
+                                                                         6 * loads.patterns.size());
+  for (std::size_t p = 0; p < loads.patterns.size(); ++p) {
+    for (LocalIndex node = 0; node < numNodes; ++node)
+      for (int d = 0; d < 6; ++d) patterns(node, 6 * p + d) = loads.patterns[p].nodal(node, d);
+    actions.patternCurves.push_back(curveNamed(model.deck, loads.patterns[p].curve));
+  }
+  actions.loadPatterns = Kokkos::create_mirror_view_and_copy(Memory{}, patterns);
+  actions.constrainedDofs = Kokkos::create_mirror_view_and_copy(Memory{}, supports.constrainedDofs);
+  actions.prescribedValue = Kokkos::create_mirror_view_and_copy(Memory{}, supports.prescribedValue);
+  actions.supportCurveIndex = Kokkos::create_mirror_view_and_copy(Memory{}, supports.curveIndex);
+  for (const auto& name : supports.curves) actions.supportCurves.push_back(*curveNamed(model.deck, name));
+  return actions;
+}
+
+pd::PdMaterial pdMaterial(const deck::Material& material) {
+  return {material.youngModulus, material.poissonRatio, material.thickness, material.fractureEnergy};
+}
+
+const std::string& createdDirectory(const std::string& directory) {
+  std::filesystem::create_directories(directory);
+  return directory;
+}
+
+std::string formatSeconds(double seconds) {
+  std::ostringstream text;
+  text.precision(4);
+  text << seconds << " s";
+  return text.str();
+}
+
+// Writes fields and history rows of one run; copies device data only when called.
+class RunOutput {
+ public:
+  RunOutput(const model::Model& model, const std::string& directory, const CentralDifferenceSolver<ExecutionSpace>& solver)
+      : model_(model),
+        solver_(solver),
+        writer_(createdDirectory(directory), "results", model.shell.mesh),
+        damage_("pd damage", model.shell.mesh.numNodes()) {
+    const auto& deck = model.deck;
+    std::vector<std::string> columns = {"step", "time"};
+    for (const auto& load : deck.loads)
+      if (!load.curve.empty() && std::find(curves_.begin(), curves_.end(), load.curve) == curves_.end())
+        curves_.push_back(load.curve);
+    for (const auto& curve : curves_) columns.push_back("load-factor-" + curve);
+    for (const auto quantity : deck.output.history) {
+      switch (quantity) {
+        case deck::HistoryQuantity::Energy:
+          for (const char* name : {"kinetic", "strain", "fracture", "damping", "external-work", "support-work",
+                                   "energy-balance-error"})
+            columns.push_back(name);
+          break;
+        case deck::HistoryQuantity::Reactions:
+          for (const auto& support : deck.supports)
+            for (const char* axis : {"x", "y", "z"}) columns.push_back("reaction-" + support.name + "-" + axis);
+          break;
+        case deck::HistoryQuantity::BrokenBonds: columns.push_back("broken-bonds"); break;
+        case deck::HistoryQuantity::CrackTip:
+          for (const char* name : {"crack-tip-x", "crack-tip-y", "crack-tip-z", "crack-length", "crack-tip-speed"})
+            columns.push_back(name);
+          break;
+        case deck::HistoryQuantity::LoadPoints:
+          for (const auto& load : deck.loads)
+            if (load.type == deck::LoadType::PointForce)
+              for (const char* axis : {"ux", "uy", "uz"}) columns.push_back(load.name + "-" + axis);
+          break;
+      }
+    }
+    history_.emplace(directory + "/history.csv", columns);
+    if (!deck.mesh.preCracks.empty()) {
+      const auto& start = deck.mesh.preCracks.front().segment.start;
+      crackOrigin_ = {start[0], start[1], start[2]};
+    }
+  }
+
+  std::string xdmfPath() const { return writer_.xdmfPath(); }
+  std::string historyPath() const { return history_->path(); }
+
+  void writeFields() {
+    const auto& deck = model_.deck;
+    const LocalIndex numNodes = model_.shell.mesh.numNodes();
+    std::vector<io::NodalField> fields;
+    for (const auto field : deck.output.fields) {
+      switch (field) {
+        case deck::OutputField::Displacement:
+          fields.push_back({"displacement", 3, hostDisplacements()});
+          break;
+        case deck::OutputField::Rotation: {
+          const auto quaternions = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().rotations);
+          HostVector3 rotationVectors("rotation", numNodes);
+          for (LocalIndex node = 0; node < numNodes; ++node) {
+            const double q[4] = {quaternions(node, 0), quaternions(node, 1), quaternions(node, 2), quaternions(node, 3)};
+            double R[3][3], theta[3];
+            rotation::toMatrix(q, R);
+            rotation::logarithm(R, theta);
+            for (int d = 0; d < 3; ++d) rotationVectors(node, d) = theta[d];
+          }
+          fields.push_back({"rotation", 3, rotationVectors});
+          break;
+        }
+        case deck::OutputField::Velocity: {
+          const auto velocities = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.velocities());
+          HostVector3 translational("velocity", numNodes);
+          for (LocalIndex node = 0; node < numNodes; ++node)
+            for (int d = 0; d < 3; ++d) translational(node, d) = velocities(node, d);
+          fields.push_back({"velocity", 3, translational});
+          break;
+        }
+        case deck::OutputField::Damage:
+          fields.push_back(io::makeScalarField("damage", hostDamage()));
+          break;
+        case deck::OutputField::Zone: {
+          Kokkos::View<int*, Kokkos::HostSpace> zone("zone", numNodes);
+          for (std::size_t k = 0; k < model_.pdNodes.extent(0); ++k) zone(model_.pdNodes(k)) = 1;
+          fields.push_back(io::makeScalarField("zone", zone));
+          break;
+        }
+      }
+    }
+    writer_.writeStep(solver_.time(), fields);
+    history_->flush();
+  }
+
+  void appendHistory(CentralDifferenceSolver<ExecutionSpace>& solver) {
+    const auto& deck = model_.deck;
+    std::vector<double> row = {double(solver.stepIndex()), solver.time()};
+    for (const auto& curve : curves_) row.push_back(deck::evaluateCurve(*deck.findCurve(curve), solver.time()));
+    HostVector3 displacements;
+    for (const auto quantity : deck.output.history) {
+      switch (quantity) {
+        case deck::HistoryQuantity::Energy: {
+          const auto e = solver.energies();
+          for (const double value :
+               {e.kinetic, e.strain, e.fracture, e.damping, e.externalWork, e.supportWork, e.balanceError()})
+            row.push_back(value);
+          break;
+        }
+        case deck::HistoryQuantity::Reactions: {
+          // Reactions balance the internal forces at the prescribed nodes (inertia of those nodes left out).
+          const auto forces = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.forces());
+          for (const auto& support : deck.supports) {
+            double sum[3] = {0.0, 0.0, 0.0};
+            for (const LocalIndex node : model_.shell.sets.nodesOfNodeOrEdgeSet(support.set))
+              for (int d = 0; d < 3; ++d) sum[d] -= forces(node, d);
+            row.insert(row.end(), sum, sum + 3);
+          }
+          break;
+        }
+        case deck::HistoryQuantity::BrokenBonds: row.push_back(double(solver.brokenBonds())); break;
+        case deck::HistoryQuantity::CrackTip: appendCrackTip(solver.time(), row); break;
+        case deck::HistoryQuantity::LoadPoints:
+          if (displacements.extent(0) == 0) displacements = hostDisplacements();
+          for (const auto& load : deck.loads) {
+            if (load.type != deck::LoadType::PointForce) continue;
+            const auto& nodes = model_.shell.sets.nodeSet(load.set);
+            double mean[3] = {0.0, 0.0, 0.0};
+            for (const LocalIndex node : nodes)
+              for (int d = 0; d < 3; ++d) mean[d] += displacements(node, d) / nodes.size();
+            row.insert(row.end(), mean, mean + 3);
+          }
+          break;
+      }
+    }
+    history_->append(row);
+  }
+
+ private:
+  HostVector3 hostDisplacements() const {
+    return Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().displacements);
+  }
+
+  Kokkos::View<double*, Kokkos::HostSpace> hostDamage() {
+    solver_.computeDamage(damage_);
+    return Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, damage_);
+  }
+
+
+  // The damaged node farthest from the first pre-crack's start; its speed is the growth of
+  // that distance between rows (the tip speed while the crack runs away from its origin).
+  void appendCrackTip(double time, std::vector<double>& row) {
+    const auto damage = hostDamage();
+    const auto& x = model_.shell.mesh.coordinates;
+    double farthest = 0.0;
+    double tip[3] = {crackOrigin_[0], crackOrigin_[1], crackOrigin_[2]};
+    for (LocalIndex node = 0; node < model_.shell.mesh.numNodes(); ++node) {
+      if (damage(node) < crackDamage) continue;
+      const double distance = std::hypot(x(node, 0) - crackOrigin_[0], x(node, 1) - crackOrigin_[1], x(node, 2) - crackOrigin_[2]);
+      if (distance > farthest) {
+        farthest = distance;
+        for (int d = 0; d < 3; ++d) tip[d] = x(node, d);
+      }
+    }
+    const double speed = time > lastTipTime_ && lastTipTime_ >= 0.0 ? (farthest - lastTipDistance_) / (time - lastTipTime_) : 0.0;
+    lastTipTime_ = time;
+    lastTipDistance_ = farthest;
+    row.insert(row.end(), {tip[0], tip[1], tip[2], farthest, speed});
+  }
+
+  const model::Model& model_;
+  const CentralDifferenceSolver<ExecutionSpace>& solver_;
+  io::XdmfTimeSeriesWriter writer_;
+  std::optional<io::CsvHistory> history_;
+  VectorView<Memory> damage_;
+  std::vector<std::string> curves_;
+  std::array<double, 3> crackOrigin_{0.0, 0.0, 0.0};
+  double lastTipTime_ = -1.0, lastTipDistance_ = 0.0;
+};
+
+}  // namespace
+
+ExplicitRunSummary runExplicit(const model::Model& model, const std::string& outputDirectory, std::ostream& log) {
+  requireRunnableModel(model);
+  const auto& deck = model.deck;
+  const auto& settings = deck.solver.explicitSettings;
+  const ExecutionSpace space;
+  const auto setupStart = std::chrono::steady_clock::now();
+  std::vector<mesh::CrackSegment> cracks;
+  for (const auto& crack : deck.mesh.preCracks) cracks.push_back(crack.segment);
+  auto body = pd::makePdBody(space, model.shell.mesh, model.pdNodes, pdMaterial(deck.material), model.horizon(),
+                             model.gridSpacing(), cracks);
+  ExplicitOptions options;
+  options.density = deck.material.density;
+  options.thickness = deck.material.thickness;
+  options.timeStep = settings.timeStep.value_or(0.0);
+  options.safetyFactor = settings.safetyFactor;
+  options.damping = settings.damping;
+  options.forceKernel = deck.peridynamics.forceKernel;
+  options.monitorEvery = std::min<long long>(100, deck.output.historyEvery);
+  CentralDifferenceSolver<ExecutionSpace> solver(space, body, makeActions(model), options);
+  const long long totalSteps =
+      settings.steps ? *settings.steps
+                     : std::max(1LL, static_cast<long long>(std::ceil(*settings.endTime / solver.timeStep() - 1e-9)));
+  const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - setupStart).count();
+  log << "explicit: " << body.numNodes() << " PD nodes, " << body.bonds.numBonds() << " bonds on "
+      << ExecutionSpace::name() << "; dt = " << solver.timeStep() << " s (critical estimate "
+      << solver.criticalTimeStep() << " s), " << totalSteps << " steps to t = " << totalSteps * solver.timeStep()
+      << " s; setup " << formatSeconds(setupSeconds) << "\n";
+  if (solver.timeStep() > solver.criticalTimeStep())
+    log << "warning: solver.dt is " << solver.timeStep() / solver.criticalTimeStep()
+        << " x the estimated critical step; the run is expected to go unstable\n";
+
+  const std::string directory = outputDirectory.empty() ? deck.output.directory : outputDirectory;
+  RunOutput output(model, directory, solver);
+  output.writeFields();
+  output.appendHistory(solver);
+  io::ProgressReporter progress(totalSteps, log);
+  const auto runStart = std::chrono::steady_clock::now();
+  const long long fieldEvery = deck.output.every, historyEvery = deck.output.historyEvery;
+  while (solver.stepIndex() < totalSteps) {
+    solver.step();
+    const long long step = solver.stepIndex();
+    const bool last = step == totalSteps;
+    if (last || step % historyEvery == 0) output.appendHistory(solver);
+    if (last || (fieldEvery > 0 && step % fieldEvery == 0)) output.writeFields();
+    progress.update(step, solver.time());
+  }
+  Kokkos::fence();
+  ExplicitRunSummary summary;
+  summary.steps = totalSteps;
+  summary.timeStep = solver.timeStep();
+  summary.criticalTimeStep = solver.criticalTimeStep();
+  summary.endTime = solver.time();
+  summary.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - runStart).count();
+  summary.brokenBonds = solver.brokenBonds();
+  summary.xdmfPath = output.xdmfPath();
+  summary.historyPath = output.historyPath();
+  const auto energy = solver.energies();
+  std::ostringstream balance;
+  balance.precision(3);
+  balance << energy.balanceError();
+  io::SummaryTable("explicit run summary")
+      .add("steps", std::to_string(totalSteps))
+      .add("time step", formatSeconds(summary.timeStep) + " (critical " + formatSeconds(summary.criticalTimeStep) + ")")
+      .add("simulated time", formatSeconds(summary.endTime))
+      .add("wall time", io::formatDuration(summary.wallSeconds) + " (" +
+                            formatSeconds(summary.wallSeconds / double(totalSteps)) + " per step)")
+      .add("setup", formatSeconds(setupSeconds))
+      .add("broken bonds", std::to_string(summary.brokenBonds) + " of " + std::to_string(body.bonds.numBonds()))
+      .add("energy balance error", balance.str())
+      .add("fields", summary.xdmfPath)
+      .add("history", summary.historyPath)
+      .print(log);
+  return summary;
+}
+
+}  // namespace perishell::solvers
