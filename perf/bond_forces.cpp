@@ -14,7 +14,8 @@
 // Usage: perishell_perf_bond_forces [--csv] [--steps S] [repeats] [nodes...]
 //   defaults: 5 repeats, 20 steps, nodes 1e4 3e4 1e5 3e5 1e6; ask for 1e7 by name: it needs
 //   ~13 GB of device memory (48 B per bond, 14 half bonds and ~0.5 kB of solver state per node)
-//   OpenMP: OMP_NUM_THREADS=2 OMP_PROC_BIND=false ./perishell_perf_bond_forces 3 1e4 1e5 1e6
+//   OpenMP: OMP_NUM_THREADS=2 OMP_PROC_BIND=false ./perishell_perf_bond_forces 3 1e4 1e5
+//           (1e6 on 2 threads: add --steps 2; construction alone is ~6 min per kernel there)
 //   CUDA:   ./perishell_perf_bond_forces 5 1e4 3e4 1e5 3e5 1e6 1e7
 #include <perishell/mesh/generators.hpp>
 #include <perishell/pd/make_body.hpp>

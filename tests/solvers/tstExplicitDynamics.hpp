@@ -91,7 +91,7 @@ TEST(TEST_CATEGORY, explicit_free_vibration_conserves_energy_over_10000_steps) {
   solver.step();
   const auto initial = solver.lastEnergyReport();
   ASSERT_GT(initial.kinetic, 0.0);
-  EXPECT_EQ(initial.strain, 0.0);
+  EXPECT_LT(initial.strain, 1e-20 * initial.kinetic);  // at rest in the reference state
   double worstDrift = 0.0, largestStrain = 0.0;
   while (solver.stepIndex() <= 10000) {
     solver.step();

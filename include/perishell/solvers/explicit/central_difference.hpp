@@ -132,7 +132,8 @@ class CentralDifferenceSolver {
     fracture::computeDamage(space_, body_, intact_, damage);
   }
 
- private:
+ // The steps below launch kernels. They are public only because nvcc rejects extended
+ // lambdas in private or protected member functions; callers use the interface above.
   void validate() const {
     if (!(options_.density > 0.0)) throw std::invalid_argument("explicit solver: density must be > 0");
     if (!(options_.thickness > 0.0)) throw std::invalid_argument("explicit solver: thickness must be > 0");
@@ -431,6 +432,7 @@ class CentralDifferenceSolver {
     return longest;
   }
 
+ private:
   ExecutionSpaceT space_;
   pd::PdBody<MemorySpace> body_;
   ExternalActions<MemorySpace> actions_;
