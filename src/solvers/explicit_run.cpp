@@ -240,7 +240,8 @@ class RunOutput {
         for (int d = 0; d < 3; ++d) tip[d] = x(node, d);
       }
     }
-    const double speed = time > lastTipTime_ && lastTipTime_ >= 0.0 ? (farthest - lastTipDistance_) / (time - lastTipTime_) : 0.0;
+    // No speed across the row where the crack first shows (its distance jumps from nothing).
+    const double speed = time > lastTipTime_ && lastTipDistance_ > 0.0 ? (farthest - lastTipDistance_) / (time - lastTipTime_) : 0.0;
     lastTipTime_ = time;
     lastTipDistance_ = farthest;
     row.insert(row.end(), {tip[0], tip[1], tip[2], farthest, speed});
