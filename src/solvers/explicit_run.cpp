@@ -265,10 +265,8 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
   const auto& settings = deck.solver.explicitSettings;
   const ExecutionSpace space;
   const auto setupStart = std::chrono::steady_clock::now();
-  std::vector<mesh::CrackSegment> cracks;
-  for (const auto& crack : deck.mesh.preCracks) cracks.push_back(crack.segment);
   auto body = pd::makePdBody(space, model.shell.mesh, model.pdNodes, pdMaterial(deck.material), model.horizon(),
-                             model.gridSpacing(), cracks);
+                             model.gridSpacing(), model.preCrackSegments());
   ExplicitOptions options;
   options.density = deck.material.density;
   options.thickness = deck.material.thickness;

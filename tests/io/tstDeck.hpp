@@ -173,6 +173,7 @@ TEST(TEST_CATEGORY, deck_glass_plate_example_reads_the_paper_numbers) {
 
   EXPECT_EQ(deck.output.directory, (path.parent_path() / "output/glass-plate").string());
   EXPECT_EQ(deck.output.every, 500);
+  EXPECT_EQ(deck.output.historyEvery, 500);  // defaults to every
   EXPECT_EQ(deck.output.fields,
             (std::vector<deck::OutputField>{deck::OutputField::Displacement, deck::OutputField::Velocity,
                                             deck::OutputField::Damage, deck::OutputField::Zone}));
@@ -287,8 +288,9 @@ perishell:
   output:
     directory: /tmp/perishell-results
     every: 10
+    history-every: 2
     fields: [displacement, rotation, damage, zone]
-    history: [energy, reactions]
+    history: [energy, reactions, load-points]
 ...
 )";
   const Deck deck = parseDeck(text, "cases/every_key.yaml");
@@ -358,10 +360,11 @@ perishell:
 
   EXPECT_EQ(deck.output.directory, "/tmp/perishell-results");  // absolute stays
   EXPECT_EQ(deck.output.every, 10);
+  EXPECT_EQ(deck.output.historyEvery, 2);
   EXPECT_EQ(deck.output.fields.size(), 4u);
   EXPECT_EQ(deck.output.history,
-            (std::vector<deck::HistoryQuantity>{deck::HistoryQuantity::Energy,
-                                                deck::HistoryQuantity::Reactions}));
+            (std::vector<deck::HistoryQuantity>{deck::HistoryQuantity::Energy, deck::HistoryQuantity::Reactions,
+                                                deck::HistoryQuantity::LoadPoints}));
   EXPECT_TRUE(deck.warnings.empty());
 }
 
@@ -389,6 +392,7 @@ TEST(TEST_CATEGORY, deck_defaults_fill_what_a_minimal_deck_leaves_out) {
   EXPECT_DOUBLE_EQ(deck.solver.explicitSettings.safetyFactor, 0.9);
   EXPECT_EQ(deck.output.directory, "output");
   EXPECT_EQ(deck.output.every, 0);
+  EXPECT_EQ(deck.output.historyEvery, 100);  // every: 0 writes the final state only
   EXPECT_EQ(deck.output.fields,
             (std::vector<deck::OutputField>{deck::OutputField::Displacement, deck::OutputField::Damage}));
   EXPECT_TRUE(deck.output.history.empty());
@@ -594,6 +598,8 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
        "solver", {"exactly one of end-time [s] or steps"}},
       {"velocity for the implicit solver", {{"    every: 1\n", "    every: 1\n    fields: [displacement, velocity]\n"}},
        "output.fields", {"velocity exists only for the explicit solver"}},
+      {"history every zero", {{"    every: 1\n", "    every: 1\n    history-every: 0\n"}}, "output.history-every",
+       {"must be >= 1, got 0"}},
   };
   for (const auto& bad : cases) {
     SCOPED_TRACE(bad.name);

@@ -5,7 +5,7 @@
 // at setup; buildPdBonds moves the PD nodes to the device and builds their bonds there.
 #include <perishell/io/deck.hpp>
 #include <perishell/mesh/mesh_sets.hpp>
-#include <perishell/pd/neighbor_search.hpp>
+#include <perishell/pd/make_body.hpp>
 
 #include <cstdint>
 #include <vector>
@@ -25,6 +25,11 @@ struct Model {
 
   double gridSpacing() const { return deck.mesh.spacing; }
   double horizon() const { return deck.peridynamics.horizonFactor * deck.mesh.spacing; }
+  std::vector<mesh::CrackSegment> preCrackSegments() const {
+    std::vector<mesh::CrackSegment> cracks;
+    for (const auto& crack : deck.mesh.preCracks) cracks.push_back(crack.segment);
+    return cracks;
+  }
   // The paper's "PD element ratio": PD elements / all elements.
   double pdRatio() const {
     return shell.mesh.numElements() > 0 ? double(numPdElements) / shell.mesh.numElements() : 0.0;
@@ -44,17 +49,9 @@ Model buildModel(const Deck& deck);
 template <class ExecutionSpaceT>
 pd::BondList<typename ExecutionSpaceT::memory_space> buildPdBonds(const ExecutionSpaceT& space,
                                                                   const Model& model) {
-  using MemorySpaceT = typename ExecutionSpaceT::memory_space;
-  const auto& coordinates = model.shell.mesh.coordinates;
-  const LocalIndex numPdNodes = static_cast<LocalIndex>(model.pdNodes.extent(0));
-  CoordinateView<Kokkos::HostSpace> hostPositions("pd node positions", numPdNodes);
-  for (LocalIndex k = 0; k < numPdNodes; ++k)
-    for (int d = 0; d < 3; ++d) hostPositions(k, d) = coordinates(model.pdNodes(k), d);
-  Kokkos::View<mesh::CrackSegment*, Kokkos::HostSpace> hostCracks("pre-cracks", model.deck.mesh.preCracks.size());
-  for (std::size_t c = 0; c < hostCracks.extent(0); ++c) hostCracks(c) = model.deck.mesh.preCracks[c].segment;
-  const auto positions = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostPositions);
-  const auto cracks = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostCracks);
-  return pd::buildBondList(space, positions, model.horizon(), model.gridSpacing(), cracks);
+  return pd::buildBondsAmong(space, model.shell.mesh, model.pdNodes, model.horizon(), model.gridSpacing(),
+                             model.preCrackSegments())
+      .bonds;
 }
 
 }  // namespace perishell::model

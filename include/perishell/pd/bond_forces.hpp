@@ -24,28 +24,6 @@ struct BondForceOutputs {
   BondFlagView<MemorySpaceT> intactNext;     // written for every bond
 };
 
-namespace detail {
-
-template <class MemorySpaceT>
-KOKKOS_INLINE_FUNCTION void loadBondEnd(const PdBody<MemorySpaceT>& body, const PdKinematics<MemorySpaceT>& state,
-                                        LocalIndex node, MicrobeamEnd& end) {
-  for (int k = 0; k < 3; ++k) {
-    end.referencePosition[k] = body.referencePositions(node, k);
-    end.position[k] = end.referencePosition[k] + state.displacements(node, k);
-    end.referenceNormal[k] = body.referenceNormals(node, k);
-  }
-  const double q[4] = {state.rotations(node, 0), state.rotations(node, 1), state.rotations(node, 2),
-                       state.rotations(node, 3)};
-  rotation::toMatrix(q, end.rotation);
-}
-
-// V_i V_j beta: the bond's share of the double volume integral (model.md §1-2).
-template <class MemorySpaceT>
-KOKKOS_INLINE_FUNCTION double bondVolumeWeight(const PdBody<MemorySpaceT>& body, LocalIndex i, LocalIndex j,
-                                               RowOffset halfBond) {
-  return body.volumes(i) * body.volumes(j) * body.bonds.volumeFactor(halfBond);
-}
-
 // Symmetric in i and j, so both ends of a bond see the same moduli.
 template <class MemorySpaceT>
 KOKKOS_INLINE_FUNCTION double bondLengthCorrection(const PdBody<MemorySpaceT>& body, LocalIndex i, LocalIndex j) {
@@ -64,6 +42,28 @@ template <class MemorySpaceT>
 KOKKOS_INLINE_FUNCTION double criticalMicropotential(const PdBody<MemorySpaceT>& body, LocalIndex i, LocalIndex j,
                                                      double referenceLength) {
   return body.criticalMicropotentialPerLength * referenceLength * bondLengthCorrection(body, i, j);
+}
+
+// V_i V_j beta: the bond's share of the double volume integral (model.md §1-2).
+template <class MemorySpaceT>
+KOKKOS_INLINE_FUNCTION double bondVolumeWeight(const PdBody<MemorySpaceT>& body, LocalIndex i, LocalIndex j,
+                                               RowOffset halfBond) {
+  return body.volumes(i) * body.volumes(j) * body.bonds.volumeFactor(halfBond);
+}
+
+namespace detail {
+
+template <class MemorySpaceT>
+KOKKOS_INLINE_FUNCTION void loadBondEnd(const PdBody<MemorySpaceT>& body, const PdKinematics<MemorySpaceT>& state,
+                                        LocalIndex node, MicrobeamEnd& end) {
+  for (int k = 0; k < 3; ++k) {
+    end.referencePosition[k] = body.referencePositions(node, k);
+    end.position[k] = end.referencePosition[k] + state.displacements(node, k);
+    end.referenceNormal[k] = body.referenceNormals(node, k);
+  }
+  const double q[4] = {state.rotations(node, 0), state.rotations(node, 1), state.rotations(node, 2),
+                       state.rotations(node, 3)};
+  rotation::toMatrix(q, end.rotation);
 }
 
 }  // namespace detail
@@ -88,9 +88,9 @@ void computeBondForces(const ExecutionSpaceT& space, deck::ForceKernel kernel, c
           detail::loadBondEnd(body, state, nodes[1], ends[1]);
           const double xi = body.bonds.referenceLength(b);
           MicrobeamResponse response;
-          evaluateMicrobeam(detail::bondMicromoduli(body, nodes[0], nodes[1]), ends[0], ends[1], xi, response);
-          const double weight = detail::bondVolumeWeight(body, nodes[0], nodes[1], b);
-          const bool breaks = response.micropotential >= detail::criticalMicropotential(body, nodes[0], nodes[1], xi);
+          evaluateMicrobeam(bondMicromoduli(body, nodes[0], nodes[1]), ends[0], ends[1], xi, response);
+          const double weight = bondVolumeWeight(body, nodes[0], nodes[1], b);
+          const bool breaks = response.micropotential >= criticalMicropotential(body, nodes[0], nodes[1], xi);
           out.intactNext(b) = breaks ? 0 : 1;
           const double halfEnergy = 0.5 * weight * response.micropotential;
           for (int end = 0; end < 2; ++end) {
@@ -123,18 +123,18 @@ void computeBondForces(const ExecutionSpaceT& space, deck::ForceKernel kernel, c
           const double xi = body.bonds.referenceLength(b);
           MicrobeamResponse response;
           const LocalIndex lower = owner ? node : neighbour, higher = owner ? neighbour : node;
-          const Micromoduli c = detail::bondMicromoduli(body, lower, higher);
+          const Micromoduli c = bondMicromoduli(body, lower, higher);
           if (owner)
             evaluateMicrobeam(c, self, other, xi, response);
           else
             evaluateMicrobeam(c, other, self, xi, response);
           const int selfEnd = owner ? 0 : 1;
-          const double weight = detail::bondVolumeWeight(body, lower, higher, b);
+          const double weight = bondVolumeWeight(body, lower, higher, b);
           for (int k = 0; k < 3; ++k) {
             sum[k] += weight * response.force[selfEnd][k];
             sum[3 + k] += weight * response.moment[selfEnd][k];
           }
-          const bool breaks = response.micropotential >= detail::criticalMicropotential(body, lower, higher, xi);
+          const bool breaks = response.micropotential >= criticalMicropotential(body, lower, higher, xi);
           if (owner) out.intactNext(b) = breaks ? 0 : 1;
           strainEnergy += 0.5 * weight * response.micropotential;
           if (breaks) fractureEnergy += 0.5 * weight * response.micropotential;

@@ -53,8 +53,37 @@ void computeQuadratureCorrections(const ExecutionSpaceT& space, PdBody<MemorySpa
       });
 }
 
-// pdNodes: mesh node indices of the PD nodes, ascending; the body's node k is mesh node
-// pdNodes(k). Throws std::invalid_argument on parameters the model rejects.
+// The chosen nodes' reference positions on the device and the bonds among them (device
+// neighbour search, pre-cracks cut). pdNodes: mesh node indices, ascending; node k of the
+// result is mesh node pdNodes(k).
+template <class MemorySpaceT>
+struct PdNodeBonds {
+  CoordinateView<MemorySpaceT> positions;
+  BondList<MemorySpaceT> bonds;
+};
+
+template <class ExecutionSpaceT>
+PdNodeBonds<typename ExecutionSpaceT::memory_space> buildBondsAmong(
+    const ExecutionSpaceT& space, const mesh::HostQuadMesh& hostMesh,
+    const Kokkos::View<const LocalIndex*, Kokkos::HostSpace>& pdNodes, double horizon, double gridSpacing,
+    const std::vector<mesh::CrackSegment>& preCracks) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  using MemorySpaceT = typename ExecutionSpaceT::memory_space;
+  const LocalIndex numPdNodes = static_cast<LocalIndex>(pdNodes.extent(0));
+  CoordinateView<Kokkos::HostSpace> hostPositions("pd node positions", numPdNodes);
+  for (LocalIndex k = 0; k < numPdNodes; ++k)
+    for (int d = 0; d < 3; ++d) hostPositions(k, d) = hostMesh.coordinates(pdNodes(k), d);
+  Kokkos::View<mesh::CrackSegment*, Kokkos::HostSpace> hostCracks("pre-cracks", preCracks.size());
+  for (std::size_t c = 0; c < preCracks.size(); ++c) hostCracks(c) = preCracks[c];
+  PdNodeBonds<MemorySpaceT> result;
+  result.positions = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostPositions);
+  const auto cracks = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostCracks);
+  result.bonds = buildBondList(space, result.positions, horizon, gridSpacing, cracks);
+  return result;
+}
+
+// The PD body of the nodes pdNodes (as buildBondsAmong). Throws std::invalid_argument on
+// parameters the model rejects.
 template <class ExecutionSpaceT>
 PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
     const ExecutionSpaceT& space, const mesh::HostQuadMesh& hostMesh,
@@ -67,33 +96,26 @@ PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
   if (material.fractureEnergy)
     body.criticalMicropotentialPerLength =
         criticalMicropotentialPerLength(*material.fractureEnergy, material.thickness, horizon);
+  auto nodeBonds = buildBondsAmong(space, hostMesh, pdNodes, horizon, gridSpacing, preCracks);
+  body.referencePositions = nodeBonds.positions;
+  body.bonds = nodeBonds.bonds;
 
+  // Volumes and normals need every quad around a node, so they are computed on the whole mesh.
   const auto meshOnDevice = mesh::mirrorTo<MemorySpaceT>(hostMesh);
   const auto allVolumes = mesh::computeNodeVolumes(space, meshOnDevice, material.thickness);
   const auto allNormals = mesh::computeNodeNormals(space, meshOnDevice);
   const auto nodes = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, pdNodes);
   const LocalIndex numPdNodes = static_cast<LocalIndex>(nodes.extent(0));
-  body.referencePositions = CoordinateView<MemorySpaceT>("pd reference positions", numPdNodes);
   body.referenceNormals = CoordinateView<MemorySpaceT>("pd reference normals", numPdNodes);
   body.volumes = VectorView<MemorySpaceT>("pd volumes", numPdNodes);
-  const auto positions = body.referencePositions, normals = body.referenceNormals;
+  const auto normals = body.referenceNormals;
   const auto volumes = body.volumes;
-  const auto coordinates = meshOnDevice.coordinates;
   Kokkos::parallel_for(
       "perishell::pd::makePdBody::gather", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numPdNodes),
       KOKKOS_LAMBDA(const LocalIndex k) {
-        const LocalIndex node = nodes(k);
-        for (int d = 0; d < 3; ++d) {
-          positions(k, d) = coordinates(node, d);
-          normals(k, d) = allNormals(node, d);
-        }
-        volumes(k) = allVolumes(node);
+        for (int d = 0; d < 3; ++d) normals(k, d) = allNormals(nodes(k), d);
+        volumes(k) = allVolumes(nodes(k));
       });
-
-  Kokkos::View<mesh::CrackSegment*, Kokkos::HostSpace> hostCracks("pre-cracks", preCracks.size());
-  for (std::size_t c = 0; c < preCracks.size(); ++c) hostCracks(c) = preCracks[c];
-  const auto cracks = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostCracks);
-  body.bonds = buildBondList(space, body.referencePositions, horizon, gridSpacing, cracks);
   computeQuadratureCorrections(space, body, horizon, material.thickness);
   return body;
 }

@@ -108,10 +108,12 @@ class CentralDifferenceSolver {
   EnergyReport energies() {
     Kokkos::deep_copy(space_, forces_, 0.0);
     Kokkos::deep_copy(space_, strainEnergy_, 0.0);
-    VectorView<MemorySpace> discardedFracture("pd fracture energy scratch", body_.numNodes());
-    pd::BondFlagView<MemorySpace> discardedFlags("intact bonds scratch", body_.bonds.numBonds());
+    if (discardedFracture_.extent(0) == 0) {
+      discardedFracture_ = VectorView<MemorySpace>("pd fracture energy scratch", body_.numNodes());
+      discardedFlags_ = pd::BondFlagView<MemorySpace>("intact bonds scratch", body_.bonds.numBonds());
+    }
     pd::computeBondForces(space_, options_.forceKernel, body_, state_, intact_,
-                          pd::BondForceOutputs<MemorySpace>{forces_, strainEnergy_, discardedFracture, discardedFlags});
+                          pd::BondForceOutputs<MemorySpace>{forces_, strainEnergy_, discardedFracture_, discardedFlags_});
     return reduceEnergies(kineticAtHalfSteps());
   }
 
@@ -125,7 +127,6 @@ class CentralDifferenceSolver {
   const pd::NodalVectorView<MemorySpace>& velocities() const { return velocities_; }
   const pd::NodalVectorView<MemorySpace>& forces() const { return forces_; }
   const pd::BondFlagView<MemorySpace>& intactBonds() const { return intact_; }
-  const NodalInertia<MemorySpace>& inertia() const { return inertia_; }
 
   long long brokenBonds() const { return fracture::countBrokenBonds(space_, intact_); }
   void computeDamage(const VectorView<MemorySpace>& damage) const {
@@ -442,6 +443,9 @@ class CentralDifferenceSolver {
   pd::NodalVectorView<MemorySpace> forces_;
   pd::BondFlagView<MemorySpace> intact_, intactNext_;
   VectorView<MemorySpace> strainEnergy_, fractureEnergy_, externalWork_, supportWork_, dampingWork_, kineticEnergy_;
+  // Outputs of energies() that must not touch the run's state; allocated on first use.
+  VectorView<MemorySpace> discardedFracture_;
+  pd::BondFlagView<MemorySpace> discardedFlags_;
   NodalInertia<MemorySpace> inertia_;
   double criticalTimeStep_ = 0.0;
   double timeStep_ = 0.0;

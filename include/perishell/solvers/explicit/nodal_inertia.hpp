@@ -32,8 +32,8 @@ NodalInertia<MemorySpaceT> computeNodalInertia(const ExecutionSpaceT& space, con
           const RowOffset b = body.bonds.fullToHalf(entry);
           const double xi = body.bonds.referenceLength(b);
           const LocalIndex neighbour = body.bonds.neighbours(entry);
-          const double weight = body.volumes(node) * body.volumes(neighbour) * body.bonds.volumeFactor(b);
-          const pd::Micromoduli c = pd::detail::bondMicromoduli(body, node, neighbour);
+          const double weight = pd::bondVolumeWeight(body, node, neighbour, b);
+          const pd::Micromoduli c = pd::bondMicromoduli(body, node, neighbour);
           const double bending = c.outOfPlaneBending + c.inPlaneBending;
           translational += weight * (c.axial / xi + 12.0 * bending / (xi * xi * xi));
           rotational += weight * (4.0 * bending + c.torsion) / xi;
