@@ -1,32 +1,40 @@
 #pragma once
 // Small fixed-size 3-vector, 3x3 matrix and unit-quaternion helpers for device code.
 // Nodal rotations are finite (model.md §5): each node keeps a unit quaternion, updated
-// multiplicatively by the exponential map of an incremental rotation vector.
-#include <Kokkos_Core.hpp>
+// multiplicatively by the exponential map of an incremental rotation vector. The vector and
+// matrix helpers take any scalar (double, or core/dual.hpp's Dual for the implicit tangents).
+#include <perishell/core/dual.hpp>
 
 namespace perishell::rotation {
 
-KOKKOS_INLINE_FUNCTION double dot(const double a[3], const double b[3]) {
+template <class T>
+KOKKOS_INLINE_FUNCTION T dot(const T a[3], const T b[3]) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-KOKKOS_INLINE_FUNCTION void cross(const double a[3], const double b[3], double out[3]) {
+template <class T>
+KOKKOS_INLINE_FUNCTION void cross(const T a[3], const T b[3], T out[3]) {
   out[0] = a[1] * b[2] - a[2] * b[1];
   out[1] = a[2] * b[0] - a[0] * b[2];
   out[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-KOKKOS_INLINE_FUNCTION double norm(const double a[3]) { return Kokkos::Experimental::sqrt(dot(a, a)); }
+template <class T>
+KOKKOS_INLINE_FUNCTION T norm(const T a[3]) {
+  return math::sqrt(dot(a, a));
+}
 
 // Scales a in place to unit length; returns the length it had.
-KOKKOS_INLINE_FUNCTION double normalise(double a[3]) {
-  const double length = norm(a);
+template <class T>
+KOKKOS_INLINE_FUNCTION T normalise(T a[3]) {
+  const T length = norm(a);
   for (int k = 0; k < 3; ++k) a[k] /= length;
   return length;
 }
 
 // out = R a
-KOKKOS_INLINE_FUNCTION void apply(const double R[3][3], const double a[3], double out[3]) {
+template <class T>
+KOKKOS_INLINE_FUNCTION void apply(const T R[3][3], const T a[3], T out[3]) {
   for (int r = 0; r < 3; ++r) out[r] = R[r][0] * a[0] + R[r][1] * a[1] + R[r][2] * a[2];
 }
 
@@ -73,14 +81,39 @@ KOKKOS_INLINE_FUNCTION void rotateBySpatialIncrement(const double theta[3], doub
 }
 
 // The rotation vector of a rotation matrix (its logarithm), exact for angles below pi:
-// the axial vector of the skew part is sin(angle) axis, the trace gives cos(angle).
-KOKKOS_INLINE_FUNCTION void logarithm(const double R[3][3], double theta[3]) {
-  const double axial[3] = {0.5 * (R[2][1] - R[1][2]), 0.5 * (R[0][2] - R[2][0]), 0.5 * (R[1][0] - R[0][1])};
-  const double sine = norm(axial);
-  const double cosine = 0.5 * (R[0][0] + R[1][1] + R[2][2] - 1.0);
-  const double angle = Kokkos::Experimental::atan2(sine, cosine);
-  const double scale = sine < 1e-8 ? 1.0 + angle * angle / 6.0 : angle / sine;
+// the axial vector of the skew part is sin(angle) axis, the trace gives cos(angle). Near
+// the identity angle/sin(angle) comes from its series in sin^2, which keeps the first and
+// second derivatives finite at zero rotation (sqrt would not).
+template <class T>
+KOKKOS_INLINE_FUNCTION void logarithm(const T R[3][3], T theta[3]) {
+  const T axial[3] = {0.5 * (R[2][1] - R[1][2]), 0.5 * (R[0][2] - R[2][0]), 0.5 * (R[1][0] - R[0][1])};
+  const T sineSquared = dot(axial, axial);
+  const T cosine = 0.5 * (R[0][0] + R[1][1] + R[2][2] - 1.0);
+  T scale;
+  if (math::valueOf(sineSquared) < 1e-6 && math::valueOf(cosine) > 0.0) {
+    // asin(s)/s = 1 + s^2/6 + 3 s^4/40 + O(s^6); s^6 < 1e-18 here.
+    scale = 1.0 + sineSquared * (1.0 / 6.0 + sineSquared * (3.0 / 40.0));
+  } else {
+    const T sine = math::sqrt(sineSquared);
+    scale = math::atan2(sine, cosine) / sine;
+  }
   for (int k = 0; k < 3; ++k) theta[k] = scale * axial[k];
+}
+
+// R(phi) = exp(phi) R to second order in phi: (I + Phi + Phi^2/2) R, Phi = skew(phi). The
+// implicit tangents seed phi with dual numbers at phi = 0, where only the first two
+// derivatives count, so this is exact for them.
+template <class T>
+KOKKOS_INLINE_FUNCTION void rotateBySpatialIncrementToSecondOrder(const T phi[3], const double R[3][3], T out[3][3]) {
+  const T skew[3][3] = {{T(0.0), -phi[2], phi[1]}, {phi[2], T(0.0), -phi[0]}, {-phi[1], phi[0], T(0.0)}};
+  T increment[3][3];
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      T square = skew[a][0] * skew[0][b] + skew[a][1] * skew[1][b] + skew[a][2] * skew[2][b];
+      increment[a][b] = skew[a][b] + 0.5 * square + (a == b ? 1.0 : 0.0);
+    }
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) out[a][b] = increment[a][0] * R[0][b] + increment[a][1] * R[1][b] + increment[a][2] * R[2][b];
 }
 
 }  // namespace perishell::rotation

@@ -54,33 +54,38 @@ inline double criticalMicropotentialPerLength(double fractureEnergy, double thic
 }
 
 // One end of a bond: reference and current position, reference unit normal and the node's
-// finite rotation (reference to current).
-struct MicrobeamEnd {
+// finite rotation (reference to current). The current state is of scalar type T: double,
+// or a dual number when the implicit solver differentiates the bond (pd/bond_tangent.hpp).
+template <class T>
+struct MicrobeamEndT {
   double referencePosition[3];
-  double position[3];
+  T position[3];
   double referenceNormal[3];
-  double rotation[3][3];
+  T rotation[3][3];
 };
+using MicrobeamEnd = MicrobeamEndT<double>;
 
 // Internal forces and moments on both ends per unit V_i V_j (the caller scales by the
 // volumes and the partial-volume factor), and the micropotential w_ij [J/m^6].
-struct MicrobeamResponse {
-  double force[2][3];
-  double moment[2][3];
-  double micropotential;
+template <class T>
+struct MicrobeamResponseT {
+  T force[2][3];
+  T moment[2][3];
+  T micropotential;
 };
+using MicrobeamResponse = MicrobeamResponseT<double>;
 
 namespace detail {
 // Orthonormal frame (e1 along the chord, e3 the mean normal made orthogonal to e1,
 // e2 = e3 x e1), as rows of frame. Returns the chord length.
-KOKKOS_INLINE_FUNCTION double bondFrame(const double chord[3], const double normalI[3],
-                                        const double normalJ[3], double frame[3][3]) {
+template <class T>
+KOKKOS_INLINE_FUNCTION T bondFrame(const T chord[3], const T normalI[3], const T normalJ[3], T frame[3][3]) {
   using namespace rotation;
   for (int k = 0; k < 3; ++k) frame[0][k] = chord[k];
-  const double length = normalise(frame[0]);
-  double meanNormal[3];
+  const T length = normalise(frame[0]);
+  T meanNormal[3];
   for (int k = 0; k < 3; ++k) meanNormal[k] = 0.5 * (normalI[k] + normalJ[k]);
-  const double along = dot(meanNormal, frame[0]);
+  const T along = dot(meanNormal, frame[0]);
   for (int k = 0; k < 3; ++k) frame[2][k] = meanNormal[k] - along * frame[0][k];
   normalise(frame[2]);
   cross(frame[2], frame[0], frame[1]);
@@ -89,12 +94,14 @@ KOKKOS_INLINE_FUNCTION double bondFrame(const double chord[3], const double norm
 
 // Rotation vector, in the current bond frame, of an end's rotation relative to the frame:
 // log(E^T R E0) with E, E0 the current and reference frames (columns e1 e2 e3).
-KOKKOS_INLINE_FUNCTION void relativeRotation(const double frame[3][3], const double rotationMatrix[3][3],
-                                             const double referenceFrame[3][3], double theta[3]) {
-  double relative[3][3];
+template <class T>
+KOKKOS_INLINE_FUNCTION void relativeRotation(const T frame[3][3], const T rotationMatrix[3][3],
+                                             const double referenceFrame[3][3], T theta[3]) {
+  T relative[3][3];
   for (int b = 0; b < 3; ++b) {
-    double rotatedAxis[3];
-    rotation::apply(rotationMatrix, referenceFrame[b], rotatedAxis);
+    T rotatedAxis[3];
+    const T axis[3] = {referenceFrame[b][0], referenceFrame[b][1], referenceFrame[b][2]};
+    rotation::apply(rotationMatrix, axis, rotatedAxis);
     for (int a = 0; a < 3; ++a) relative[a][b] = rotation::dot(frame[a], rotatedAxis);
   }
   rotation::logarithm(relative, theta);
@@ -108,42 +115,47 @@ KOKKOS_INLINE_FUNCTION void relativeRotation(const double frame[3][3], const dou
 // Forces are its variation: the chord's spin moves a and b by +-(du_j - du_i).e3/l and
 // -+(du_j - du_i).e2/l, so the end shears balance the end moments about the current chord
 // and the bond carries no net force or moment (momentum is conserved exactly).
-KOKKOS_INLINE_FUNCTION void evaluateMicrobeam(const Micromoduli& c, const MicrobeamEnd& i,
-                                              const MicrobeamEnd& j, double referenceLength,
-                                              MicrobeamResponse& out) {
-  double referenceChord[3], chord[3], currentNormalI[3], currentNormalJ[3];
+template <class T>
+KOKKOS_INLINE_FUNCTION void evaluateMicrobeam(const Micromoduli& c, const MicrobeamEndT<T>& i,
+                                              const MicrobeamEndT<T>& j, double referenceLength,
+                                              MicrobeamResponseT<T>& out) {
+  double referenceChord[3];
+  T chord[3], currentNormalI[3], currentNormalJ[3];
   for (int k = 0; k < 3; ++k) {
     referenceChord[k] = j.referencePosition[k] - i.referencePosition[k];
     chord[k] = j.position[k] - i.position[k];
   }
-  rotation::apply(i.rotation, i.referenceNormal, currentNormalI);
-  rotation::apply(j.rotation, j.referenceNormal, currentNormalJ);
-  double referenceFrame[3][3], frame[3][3];
+  const T referenceNormalI[3] = {i.referenceNormal[0], i.referenceNormal[1], i.referenceNormal[2]};
+  const T referenceNormalJ[3] = {j.referenceNormal[0], j.referenceNormal[1], j.referenceNormal[2]};
+  rotation::apply(i.rotation, referenceNormalI, currentNormalI);
+  rotation::apply(j.rotation, referenceNormalJ, currentNormalJ);
+  double referenceFrame[3][3];
+  T frame[3][3];
   detail::bondFrame(referenceChord, i.referenceNormal, j.referenceNormal, referenceFrame);
-  const double length = detail::bondFrame(chord, currentNormalI, currentNormalJ, frame);
-  double thetaI[3], thetaJ[3];
+  const T length = detail::bondFrame(chord, currentNormalI, currentNormalJ, frame);
+  T thetaI[3], thetaJ[3];
   detail::relativeRotation(frame, i.rotation, referenceFrame, thetaI);
   detail::relativeRotation(frame, j.rotation, referenceFrame, thetaJ);
 
   const double xi = referenceLength;
-  const double stretch = (length - xi) / xi;
-  const double twist = thetaJ[0] - thetaI[0];
+  const T stretch = (length - xi) / xi;
+  const T twist = thetaJ[0] - thetaI[0];
   const double kBy = 2.0 * c.outOfPlaneBending / xi, kBz = 2.0 * c.inPlaneBending / xi;
-  const double axialForce = c.axial * stretch;
-  const double torque = c.torsion * twist / xi;
-  const double momentByI = kBy * (2.0 * thetaI[1] + thetaJ[1]), momentByJ = kBy * (2.0 * thetaJ[1] + thetaI[1]);
-  const double momentBzI = kBz * (2.0 * thetaI[2] + thetaJ[2]), momentBzJ = kBz * (2.0 * thetaJ[2] + thetaI[2]);
+  const T axialForce = c.axial * stretch;
+  const T torque = c.torsion * twist / xi;
+  const T momentByI = kBy * (2.0 * thetaI[1] + thetaJ[1]), momentByJ = kBy * (2.0 * thetaJ[1] + thetaI[1]);
+  const T momentBzI = kBz * (2.0 * thetaI[2] + thetaJ[2]), momentBzJ = kBz * (2.0 * thetaJ[2] + thetaI[2]);
   out.micropotential =
       0.5 * c.axial * stretch * stretch * xi +
       kBy * (thetaI[1] * thetaI[1] + thetaI[1] * thetaJ[1] + thetaJ[1] * thetaJ[1]) +
       kBz * (thetaI[2] * thetaI[2] + thetaI[2] * thetaJ[2] + thetaJ[2] * thetaJ[2]) +
       0.5 * c.torsion * twist * twist / xi;
 
-  const double shearAlongE3 = (momentByI + momentByJ) / length;
-  const double shearAlongE2 = -(momentBzI + momentBzJ) / length;
+  const T shearAlongE3 = (momentByI + momentByJ) / length;
+  const T shearAlongE2 = -(momentBzI + momentBzJ) / length;
   for (int k = 0; k < 3; ++k) {
     // dw/dx_j; dw/dx_i is its negative.
-    const double gradientJ = axialForce * frame[0][k] + shearAlongE2 * frame[1][k] + shearAlongE3 * frame[2][k];
+    const T gradientJ = axialForce * frame[0][k] + shearAlongE2 * frame[1][k] + shearAlongE3 * frame[2][k];
     out.force[0][k] = gradientJ;
     out.force[1][k] = -gradientJ;
     out.moment[0][k] = -(-torque * frame[0][k] + momentByI * frame[1][k] + momentBzI * frame[2][k]);
