@@ -5,6 +5,7 @@
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/model.hpp>
 #include <perishell/solvers/explicit/explicit_run.hpp>
+#include <perishell/solvers/implicit/implicit_run.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -28,8 +29,9 @@ Commands:
                   device with progress lines (step, time, ETA), write DIR/results.xmf (+ .h5
                   per output step) and DIR/history.csv, and print a summary table.
                   DIR is output.directory of the deck unless --output DIR is given. Explicit
-                  decks (100 % PD) run; implicit decks are refused until that solver lands.
-                  Exit 1 with the reason on a bad deck or an unstable run.
+                  decks run 100 % PD; implicit decks (Newton, load increments) run CCM-only
+                  or 100 % PD. Exit 1 with the reason on a bad deck, an unstable explicit
+                  run or an increment Newton cannot converge.
   check DECK      Validate a case deck (docs/deck.md), build its model — mesh, zones, PD
                   nodes and, on the device, the bonds — and print a model summary: nodes,
                   elements, PD ratio, bonds, DOF counts. Exit 1 with the deck key and the
@@ -179,17 +181,16 @@ int runDeck(const std::vector<std::string>& args) {
   std::printf("perishell %s: run %s\n", perishell::versionString().c_str(), parsed.deckPath.c_str());
   if (!deck.title.empty()) std::printf("  %-10s %s\n", "title", deck.title.c_str());
   for (const auto& warning : deck.warnings) std::printf("  warning: %s\n", warning.c_str());
-  if (deck.solver.type != perishell::deck::SolverType::Explicit)
-    throw std::invalid_argument(deck.sourceName +
-                                ": solver.type: the implicit solver is not available yet; 'perishell check' "
-                                "validates this deck");
   const auto model = perishell::model::buildModel(deck);
   std::printf("  %-10s %s nodes, %s quads, PD ratio %.1f %%, %s free DOF\n", "model",
               withThousands(model.shell.mesh.numNodes()).c_str(),
               withThousands(model.shell.mesh.numElements()).c_str(), 100.0 * model.pdRatio(),
               withThousands(model.freeDofCount()).c_str());
   std::fflush(stdout);
-  perishell::solvers::runExplicit(model, parsed.outputDirectory, std::cout);
+  if (deck.solver.type == perishell::deck::SolverType::Explicit)
+    perishell::solvers::runExplicit(model, parsed.outputDirectory, std::cout);
+  else
+    perishell::solvers::runImplicit(model, parsed.outputDirectory, std::cout);
   return 0;
 }
 

@@ -642,7 +642,7 @@ deck::Solver readSolver(const Section& section) {
   using deck::SolverType;
   const std::vector<std::string> explicitKeys{"type", "end-time", "steps", "dt", "safety-factor", "damping"};
   const std::vector<std::string> implicitKeys{"type", "increments", "max-iterations", "tolerance",
-                                              "preconditioner"};
+                                              "preconditioner", "max-cuts"};
   std::vector<std::string> allKeys = explicitKeys;
   allKeys.insert(allKeys.end(), implicitKeys.begin() + 1, implicitKeys.end());
   section.allowOnly(allKeys);
@@ -690,6 +690,12 @@ deck::Solver readSolver(const Section& section) {
         "preconditioner",
         {{"jacobi", deck::Preconditioner::Jacobi}, {"block-jacobi", deck::Preconditioner::BlockJacobi}},
         settings.preconditioner);
+    if (section.has("max-cuts")) {
+      const double cuts = section.number("max-cuts");
+      if (!(cuts >= 0 && cuts <= 30 && cuts == std::floor(cuts)))
+        section.fail("max-cuts", "must be a whole number in [0, 30], got " + formatNumber(cuts));
+      settings.maxCuts = int(cuts);
+    }
   }
   return solver;
 }

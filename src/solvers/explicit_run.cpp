@@ -5,6 +5,7 @@
 #include <perishell/pd/make_body.hpp>
 #include <perishell/solvers/explicit/central_difference.hpp>
 #include <perishell/solvers/explicit/explicit_run.hpp>
+#include <perishell/solvers/model_actions.hpp>
 
 #include <algorithm>
 #include <array>
@@ -36,31 +37,6 @@ void requireRunnableModel(const model::Model& model) {
       throw std::invalid_argument(deck.sourceName + ": loads." + load.name +
                                   ".follower: the explicit solver applies pressure in the reference direction "
                                   "only; set follower: false");
-}
-
-std::optional<deck::Curve> curveNamed(const Deck& deck, const std::string& name) {
-  if (name.empty()) return std::nullopt;
-  return *deck.findCurve(name);
-}
-
-ExternalActions<Memory> makeActions(const model::Model& model) {
-  const auto loads = model::buildNodalLoads(model);
-  const auto supports = model::buildSupportConditions(model);
-  const LocalIndex numNodes = model.shell.mesh.numNodes();
-  ExternalActions<Memory> actions;
-  Kokkos::View<double**, Kokkos::LayoutRight, Kokkos::HostSpace> patterns("load patterns", numNodes,
-                                                                         6 * loads.patterns.size());
-  for (std::size_t p = 0; p < loads.patterns.size(); ++p) {
-    for (LocalIndex node = 0; node < numNodes; ++node)
-      for (int d = 0; d < 6; ++d) patterns(node, 6 * p + d) = loads.patterns[p].nodal(node, d);
-    actions.patternCurves.push_back(curveNamed(model.deck, loads.patterns[p].curve));
-  }
-  actions.loadPatterns = Kokkos::create_mirror_view_and_copy(Memory{}, patterns);
-  actions.constrainedDofs = Kokkos::create_mirror_view_and_copy(Memory{}, supports.constrainedDofs);
-  actions.prescribedValue = Kokkos::create_mirror_view_and_copy(Memory{}, supports.prescribedValue);
-  actions.supportCurveIndex = Kokkos::create_mirror_view_and_copy(Memory{}, supports.curveIndex);
-  for (const auto& name : supports.curves) actions.supportCurves.push_back(*curveNamed(model.deck, name));
-  return actions;
 }
 
 pd::PdMaterial pdMaterial(const deck::Material& material) {
@@ -275,7 +251,7 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
   options.damping = settings.damping;
   options.forceKernel = deck.peridynamics.forceKernel;
   options.monitorEvery = std::min<long long>(100, deck.output.historyEvery);
-  CentralDifferenceSolver<ExecutionSpace> solver(space, body, makeActions(model), options);
+  CentralDifferenceSolver<ExecutionSpace> solver(space, body, makeExternalActions<Memory>(model), options);
   const long long totalSteps =
       settings.steps ? *settings.steps
                      : std::max(1LL, static_cast<long long>(std::ceil(*settings.endTime / solver.timeStep() - 1e-9)));

@@ -1,6 +1,8 @@
 // Belos CG on Kokkos: the MultiVec adapter against hand-computed values, CG on a device-
-// assembled 2D Laplacian (plain and badly scaled), and the failure paths (zero diagonal,
-// indefinite matrix).
+// assembled 2D Laplacian (plain and badly scaled), the nodal block-Jacobi preconditioner on
+// host-built 6-DOF-per-node systems, the GMRES fallback on an indefinite matrix, and the
+// failure paths (zero diagonal, singular block, indefinite matrix without fallback).
+#include <perishell/solvers/belos/block_jacobi.hpp>
 #include <perishell/solvers/belos/cg_solve.hpp>
 #include <perishell/solvers/belos/crs_operator.hpp>
 #include <perishell/solvers/belos/kokkos_multivector.hpp>
@@ -12,8 +14,10 @@
 #include <Teuchos_RCP.hpp>
 #include <Teuchos_SerialDenseMatrix.hpp>
 
+#include <array>
 #include <cmath>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -173,6 +177,151 @@ inline perishell::belos::CgOptions cgOptions(perishell::belos::CgOptions::Precon
   options.tolerance = tolerance;
   options.maxIterations = maxIterations;
   return options;
+}
+
+// ---------------------------------------------------------------- host-built block systems
+using Block = std::array<std::array<double, 6>, 6>;
+using HostRows = std::vector<std::map<LocalIndex, double>>;  // row -> (column -> value)
+
+// Host rows into a new device CRS matrix (columns sorted, as std::map keeps them).
+template <class ExecutionSpaceT>
+Matrix<ExecutionSpaceT> matrixOnDevice(const HostRows& rows) {
+  using memory_space = typename ExecutionSpaceT::memory_space;
+  const auto numRows = static_cast<LocalIndex>(rows.size());
+  Kokkos::View<RowOffset*, Kokkos::HostSpace> rowMap("host_row_map", rows.size() + 1);
+  for (std::size_t i = 0; i < rows.size(); ++i) rowMap(i + 1) = rowMap(i) + rows[i].size();
+  const RowOffset nnz = rowMap(rows.size());
+  Kokkos::View<LocalIndex*, Kokkos::HostSpace> entries("host_entries", nnz);
+  Kokkos::View<double*, Kokkos::HostSpace> values("host_values", nnz);
+  RowOffset k = 0;
+  for (const auto& row : rows)
+    for (const auto& [column, value] : row) {
+      entries(k) = column;
+      values(k) = value;
+      ++k;
+    }
+  return Matrix<ExecutionSpaceT>("host_built", numRows, numRows, nnz,
+                                 Kokkos::create_mirror_view_and_copy(memory_space(), values),
+                                 Kokkos::create_mirror_view_and_copy(memory_space(), rowMap),
+                                 Kokkos::create_mirror_view_and_copy(memory_space(), entries));
+}
+
+template <class ExecutionSpaceT>
+Vector<ExecutionSpaceT> vectorOnDevice(const std::vector<double>& host) {
+  Vector<ExecutionSpaceT> v("from_host", host.size());
+  const auto mirror = Kokkos::create_mirror_view(v);
+  for (std::size_t i = 0; i < host.size(); ++i) mirror(i) = host[i];
+  Kokkos::deep_copy(v, mirror);
+  return v;
+}
+
+template <class VectorT>
+std::vector<double> vectorOnHost(const VectorT& v) {
+  const auto mirror = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), v);
+  return std::vector<double>(mirror.data(), mirror.data() + mirror.extent(0));
+}
+
+// rows(rowNode block) += sign * block (columns of colNode); DOF `skippedDof` of any node is
+// left out entirely (an untouched DOF: an empty row and column).
+inline void addBlock(HostRows& rows, int rowNode, int colNode, const Block& block, double sign, int skippedDof = -1) {
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) {
+      const LocalIndex row = 6 * rowNode + i, col = 6 * colNode + j;
+      if (row == skippedDof || col == skippedDof) continue;
+      rows[row][col] += sign * block[i][j];
+    }
+}
+
+// A thin-plate-like stiffness scale: translations ~1e6 N/m, rotations ~1e-3 N m/rad.
+inline std::array<double, 6> plateScales() {
+  const double translation = std::sqrt(1e6), rotation = std::sqrt(1e-3);
+  return {translation, translation, translation, rotation, rotation, rotation};
+}
+
+// S C S with C(i, j) = rho^|i - j| (Kac-Murdock-Szego: SPD for |rho| < 1), so translations
+// and rotations are strongly coupled inside the block; rho varies with the element.
+inline Block coupledBlock(double rho) {
+  const auto s = plateScales();
+  Block block{};
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) block[i][j] = s[i] * std::pow(rho, std::abs(i - j)) * s[j];
+  return block;
+}
+
+// 1-D chain of numNodes 6-DOF nodes, element e joining nodes e and e + 1 with stiffness
+// k_e = coupledBlock(rho_e) on (u_e - u_{e+1}); node 0 sits on a spring k_0 to ground.
+// A sum of PSD terms with a grounded, connected chain: SPD.
+inline HostRows plateChain(int numNodes, int skippedDof = -1) {
+  HostRows rows(static_cast<std::size_t>(6 * numNodes));
+  addBlock(rows, 0, 0, coupledBlock(0.9), 1.0, skippedDof);
+  for (int e = 0; e + 1 < numNodes; ++e) {
+    const Block k = coupledBlock(0.9 + 0.08 * std::sin(0.9 * e));
+    addBlock(rows, e, e, k, 1.0, skippedDof);
+    addBlock(rows, e + 1, e + 1, k, 1.0, skippedDof);
+    addBlock(rows, e, e + 1, k, -1.0, skippedDof);
+    addBlock(rows, e + 1, e, k, -1.0, skippedDof);
+  }
+  return rows;
+}
+
+// Solution of the chain in natural units: O(1) after scaling by S, so that translations and
+// rotations weigh alike in the error.
+inline std::vector<double> plateSolution(int numNodes) {
+  const auto s = plateScales();
+  std::vector<double> x(static_cast<std::size_t>(6 * numNodes));
+  for (std::size_t k = 0; k < x.size(); ++k) x[k] = (1.0 + 0.5 * std::sin(0.37 * k)) / s[k % 6];
+  return x;
+}
+
+// ||S (x - exact)|| / ||S exact||
+inline double scaledRelativeError(const std::vector<double>& x, const std::vector<double>& exact) {
+  const auto s = plateScales();
+  double error = 0.0, norm = 0.0;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    error += std::pow(s[k % 6] * (x[k] - exact[k]), 2);
+    norm += std::pow(s[k % 6] * exact[k], 2);
+  }
+  return std::sqrt(error / norm);
+}
+
+// ||b - A x|| / ||b||
+template <class ExecutionSpaceT>
+double relativeResidual(const Matrix<ExecutionSpaceT>& A, const Vector<ExecutionSpaceT>& x,
+                        const Vector<ExecutionSpaceT>& b) {
+  Vector<ExecutionSpaceT> r("residual", b.extent(0));
+  Kokkos::deep_copy(r, b);
+  KokkosSparse::spmv("N", -1.0, A, x, 1.0, r);
+  return KokkosBlas::nrm2(r) / KokkosBlas::nrm2(b);
+}
+
+// Node p's block: S (M^T M + I) S with M(i, j) = sin(1.3 (i + 1)(j + 1) + p): dense, SPD,
+// badly scaled. rankTwoNode gets u u^T + v v^T instead: no empty row, but singular.
+inline Block denseSpdBlock(int node) {
+  const auto s = plateScales();
+  Block m{}, block{};
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) m[i][j] = std::sin(1.3 * (i + 1) * (j + 1) + node);
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) {
+      double mtm = i == j ? 1.0 : 0.0;
+      for (int k = 0; k < 6; ++k) mtm += m[k][i] * m[k][j];
+      block[i][j] = s[i] * mtm * s[j];
+    }
+  return block;
+}
+
+inline Block rankTwoBlock() {
+  const double u[6] = {1, 2, 0, -1, 0.5, 3}, v[6] = {0, 1, 1, 2, -2, 1};
+  Block block{};
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) block[i][j] = u[i] * u[j] + v[i] * v[j];
+  return block;
+}
+
+inline HostRows blockDiagonal(int numNodes, int rankTwoNode = -1) {
+  HostRows rows(static_cast<std::size_t>(6 * numNodes));
+  for (int p = 0; p < numNodes; ++p) addBlock(rows, p, p, p == rankTwoNode ? rankTwoBlock() : denseSpdBlock(p), 1.0);
+  return rows;
 }
 
 // A (4 x 2) has columns a0 = (1, 2, 3, 4), a1 = (0, 1, 0, -1); row-major below.
@@ -466,8 +615,10 @@ TEST(TEST_CATEGORY, belos_cg_reports_breakdown_on_indefinite_matrix) {
   const auto b = ones<TEST_EXECSPACE>(n * n);
   for (const auto preconditioner : {Preconditioner::None, Preconditioner::Jacobi}) {
     Vector<TEST_EXECSPACE> x("x", n * n);
+    auto options = cgOptions(preconditioner, 1e-10, 100);
+    options.fallbackOnBreakdown = false;
     try {
-      perishell::belos::solveCg(A, b, x, cgOptions(preconditioner, 1e-10, 100));
+      perishell::belos::solveCg(A, b, x, options);
       FAIL() << "CG did not report a breakdown";
     } catch (const std::runtime_error& e) {
       std::cout << "[ belos cg ] indefinite: " << e.what() << "\n";
@@ -500,4 +651,193 @@ TEST(TEST_CATEGORY, belos_cg_rejects_mismatched_sizes) {
   const auto b = ones<TEST_EXECSPACE>(n * n);
   Vector<TEST_EXECSPACE> x("x", n * n - 1);
   EXPECT_THROW(perishell::belos::solveCg(A, b, x), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------- block Jacobi
+TEST(TEST_CATEGORY, belos_cg_block_jacobi_solves_block_diagonal_in_one_iteration) {
+  using namespace perishell_test_belos_cg;
+  const int numNodes = 5;
+  const auto A = matrixOnDevice<TEST_EXECSPACE>(blockDiagonal(numNodes));
+  const auto exactHost = plateSolution(numNodes);
+  const auto exact = vectorOnDevice<TEST_EXECSPACE>(exactHost);
+  const auto b = multiply(A, exact);
+  // The preconditioner alone is the exact inverse here.
+  perishell::belos::BlockJacobiPreconditioner<TEST_EXECSPACE> blockJacobi(A, 6);
+  ASSERT_EQ(blockJacobi.blockSize(), 6);
+  const auto B = makeMultiVector<TEST_EXECSPACE>(6 * numNodes, 1, vectorOnHost(b));
+  MultiVector<TEST_EXECSPACE> Y("Y", 6 * numNodes, 1);
+  blockJacobi.Apply(*B, Y);
+  const auto y = onHost<TEST_EXECSPACE>(Y);
+  const double applyError = scaledRelativeError(std::vector<double>(y.data(), y.data() + y.extent(0)), exactHost);
+  EXPECT_LE(applyError, 1e-13);
+
+  Vector<TEST_EXECSPACE> x("x", exact.extent(0));
+  const auto result = perishell::belos::solveCg(
+      A, b, x, cgOptions(perishell::belos::CgOptions::Preconditioner::BlockJacobi, 1e-10, 100));
+  const double error = scaledRelativeError(vectorOnHost(x), exactHost);
+  std::cout << "[ belos cg ] block-diagonal 30 x 30, block Jacobi: " << result.iterations
+            << " iteration(s), achieved tolerance " << result.achievedTolerance << ", scaled error " << error
+            << " (apply alone: " << applyError << ")\n";
+  EXPECT_TRUE(result.converged);
+  EXPECT_EQ(result.iterations, 1);
+  EXPECT_EQ(result.method, "CG");
+  EXPECT_TRUE(result.breakdown.empty());
+  EXPECT_LE(error, 1e-13);
+}
+
+TEST(TEST_CATEGORY, belos_cg_block_jacobi_pivots_nonsymmetric_blocks) {
+  using namespace perishell_test_belos_cg;
+  // Two 3 x 3 blocks; the first has zeros on its diagonal (det -7), so the elimination must pivot.
+  const double blocks[2][3][3] = {{{0, 2, 1}, {1, 0, 0}, {3, 1, 4}}, {{4, 1, 0}, {2, 5, 1}, {0, 1, 3}}};
+  HostRows rows(6);
+  for (int p = 0; p < 2; ++p)
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (blocks[p][i][j] != 0.0) rows[3 * p + i][3 * p + j] = blocks[p][i][j];
+  const auto A = matrixOnDevice<TEST_EXECSPACE>(rows);
+  const std::vector<double> exact = {1, -2, 3, 0.5, 4, -1};
+  const auto X = makeMultiVector<TEST_EXECSPACE>(6, 1, exact);
+  MultiVector<TEST_EXECSPACE> AX("AX", 6, 1), Y("Y", 6, 1);
+  perishell::belos::CrsOperator<TEST_EXECSPACE> op(A);
+  perishell::belos::BlockJacobiPreconditioner<TEST_EXECSPACE> blockJacobi(A, 3);
+  for (const auto trans : {Belos::NOTRANS, Belos::TRANS}) {
+    op.Apply(*X, AX, trans);
+    blockJacobi.Apply(AX, Y, trans);  // (A^T)^{-1} A^T x = x as well
+    const auto y = onHost<TEST_EXECSPACE>(Y);
+    for (int i = 0; i < 6; ++i) EXPECT_NEAR(y(i, 0), exact[i], 1e-14) << "row " << i << ", trans " << trans;
+  }
+  // The first block's second row is e_0^T, so row 0 of its inverse is e_1^T.
+  const auto inverses = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), blockJacobi.inverses());
+  EXPECT_NEAR(inverses(0, 0, 0), 0.0, 1e-15);
+  EXPECT_NEAR(inverses(0, 0, 1), 1.0, 1e-15);
+  EXPECT_NEAR(inverses(0, 0, 2), 0.0, 1e-15);
+}
+
+TEST(TEST_CATEGORY, belos_cg_block_jacobi_beats_jacobi_on_plate_chain) {
+  using namespace perishell_test_belos_cg;
+  using Preconditioner = perishell::belos::CgOptions::Preconditioner;
+  const int numNodes = 40;
+  const auto A = matrixOnDevice<TEST_EXECSPACE>(plateChain(numNodes));
+  const auto exactHost = plateSolution(numNodes);
+  const auto exact = vectorOnDevice<TEST_EXECSPACE>(exactHost);
+  const auto b = multiply(A, exact);
+  const double tolerance = 1e-10;
+  int iterations[3] = {};
+  double errors[3] = {};
+  const char* names[3] = {"none", "jacobi", "block-jacobi"};
+  for (int p = 0; p < 3; ++p) {
+    Vector<TEST_EXECSPACE> x("x", exact.extent(0));
+    const auto preconditioner = perishell::belos::preconditionerFromName(names[p]);
+    const auto result = perishell::belos::solveCg(A, b, x, cgOptions(preconditioner, tolerance, 2000));
+    iterations[p] = result.iterations;
+    errors[p] = scaledRelativeError(vectorOnHost(x), exactHost);
+    const double residual = relativeResidual(A, x, b);
+    std::cout << "[ belos cg ] plate chain 240 DOF, " << names[p] << ": " << result.iterations
+              << " iterations, converged " << result.converged << ", relative residual " << residual
+              << ", scaled error " << errors[p] << "\n";
+    if (preconditioner == Preconditioner::None) {
+      // The 1e9 scale gap leaves plain CG far from the tolerance (measured: residual 2e-7).
+      EXPECT_FALSE(result.converged);
+      continue;
+    }
+    EXPECT_TRUE(result.converged) << names[p];
+    EXPECT_EQ(result.method, "CG") << names[p];
+    EXPECT_LE(residual, tolerance) << names[p];
+    EXPECT_LE(errors[p], 1e-5) << names[p];
+  }
+  // Measured on OpenMP: point Jacobi 979, block Jacobi 191 (point Jacobi leaves the coupling
+  // inside each node, cond(C) ~ (1 + rho) / (1 - rho) per block, to CG).
+  EXPECT_LT(2 * iterations[2], iterations[1]);
+  EXPECT_LT(iterations[2], 300);
+}
+
+TEST(TEST_CATEGORY, belos_cg_falls_back_to_gmres_on_indefinite_matrix) {
+  using namespace perishell_test_belos_cg;
+  const int n = 12;  // 144 rows: 24 blocks of 6
+  // Laplacian - 2 I (see belos_cg_reports_breakdown_on_indefinite_matrix); its 6 x 6 diagonal
+  // blocks are tridiag(-1, 2, -1), SPD, so block Jacobi builds and CG still breaks down.
+  const auto unit = ones<TEST_EXECSPACE>(n * n);
+  const auto A = assembleScaledLaplacian<TEST_EXECSPACE>(n, unit, 2.0);
+  const auto exact = knownSolution<TEST_EXECSPACE>(unit);
+  const auto b = multiply(A, exact);
+  const double tolerance = 1e-10;
+  for (const char* name : {"none", "jacobi", "block-jacobi"}) {
+    Vector<TEST_EXECSPACE> x("x", n * n);
+    const auto result = perishell::belos::solveCg(
+        A, b, x, cgOptions(perishell::belos::preconditionerFromName(name), tolerance, 500));
+    const double residual = relativeResidual(A, x, b);
+    const double error = relativeError(x, exact);
+    std::cout << "[ belos cg ] indefinite 144 x 144, " << name << ": " << result.method << " in "
+              << result.iterations << " iterations, relative residual " << residual << ", relative error "
+              << error << "\n";
+    EXPECT_EQ(result.method, "GMRES") << name;
+    EXPECT_NE(result.breakdown.find("CG broke down"), std::string::npos) << result.breakdown;
+    EXPECT_TRUE(result.converged) << name;
+    EXPECT_GT(result.iterations, 0) << name;
+    EXPECT_LE(result.iterations, 144) << name;  // GMRES is exact after n steps
+    EXPECT_LE(result.achievedTolerance, tolerance) << name;
+    EXPECT_LE(residual, tolerance) << name;
+    EXPECT_LE(error, 1e-7) << name;
+  }
+}
+
+TEST(TEST_CATEGORY, belos_cg_block_jacobi_rejects_singular_blocks) {
+  using namespace perishell_test_belos_cg;
+  const auto expectFailure = [](const Matrix<TEST_EXECSPACE>& A, const std::vector<std::string>& needles) {
+    try {
+      perishell::belos::BlockJacobiPreconditioner<TEST_EXECSPACE> blockJacobi(A, 6);
+      ADD_FAILURE() << "BlockJacobiPreconditioner accepted a bad block";
+    } catch (const std::runtime_error& e) {
+      std::cout << "[ belos cg ] " << e.what() << "\n";
+      for (const auto& needle : needles)
+        EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  // Rotation DOF 4 of node 3 belongs to no element: empty row and column.
+  const auto untouched = matrixOnDevice<TEST_EXECSPACE>(plateChain(8, 6 * 3 + 4));
+  expectFailure(untouched, {"node 3 ", "rows 18 to 23", "local DOF 4", "no stiffness in some DOF"});
+  // solveCg builds the same preconditioner before iterating.
+  const auto b = ones<TEST_EXECSPACE>(6 * 8);
+  Vector<TEST_EXECSPACE> x("x", 6 * 8);
+  try {
+    perishell::belos::solveCg(untouched, b, x,
+                              cgOptions(perishell::belos::CgOptions::Preconditioner::BlockJacobi, 1e-10, 100));
+    FAIL() << "solveCg accepted a singular block";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("node 3 "), std::string::npos) << e.what();
+  }
+  // Rank 2 with no empty row: found by the pivot, not by the row scan.
+  expectFailure(matrixOnDevice<TEST_EXECSPACE>(blockDiagonal(4, 1)), {"node 1 ", "is singular", "no stiffness"});
+  // A NaN entry in node 5.
+  auto withNan = plateChain(8);
+  withNan[6 * 5 + 2][6 * 5 + 3] = std::nan("");
+  expectFailure(matrixOnDevice<TEST_EXECSPACE>(withNan), {"node 5 ", "NaN", "local DOF 2"});
+  // 100 rows are no whole number of 6-DOF nodes; block sizes outside [1, 6].
+  const auto laplacian = assembleScaledLaplacian<TEST_EXECSPACE>(10, ones<TEST_EXECSPACE>(100));
+  try {
+    perishell::belos::BlockJacobiPreconditioner<TEST_EXECSPACE> blockJacobi(laplacian, 6);
+    FAIL() << "BlockJacobiPreconditioner accepted 100 rows in blocks of 6";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("100 rows"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(perishell::belos::BlockJacobiPreconditioner<TEST_EXECSPACE>(laplacian, 0), std::invalid_argument);
+  EXPECT_THROW(perishell::belos::BlockJacobiPreconditioner<TEST_EXECSPACE>(laplacian, 10), std::invalid_argument);
+  // Block size 4 fits 100 rows: the 2 x 2 grid rows of the Laplacian give SPD blocks.
+  EXPECT_NO_THROW(perishell::belos::BlockJacobiPreconditioner<TEST_EXECSPACE>(laplacian, 4));
+}
+
+TEST(TEST_CATEGORY, belos_cg_preconditioner_names) {
+  using perishell::belos::preconditionerFromName;
+  using Preconditioner = perishell::belos::CgOptions::Preconditioner;
+  EXPECT_EQ(preconditionerFromName("none"), Preconditioner::None);
+  EXPECT_EQ(preconditionerFromName("jacobi"), Preconditioner::Jacobi);
+  EXPECT_EQ(preconditionerFromName("block-jacobi"), Preconditioner::BlockJacobi);
+  try {
+    preconditionerFromName("ilu");
+    FAIL() << "preconditionerFromName accepted 'ilu'";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("'ilu'"), std::string::npos) << what;
+    EXPECT_NE(what.find("none, jacobi, block-jacobi"), std::string::npos) << what;
+  }
 }

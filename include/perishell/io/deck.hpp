@@ -163,6 +163,7 @@ struct ImplicitSettings {
   int maxIterations = 100;
   double tolerance = 1e-8;  // Newton: residual norm relative to the external load norm
   Preconditioner preconditioner = Preconditioner::BlockJacobi;
+  int maxCuts = 8;  // bisections of an increment Newton fails on, before the run stops
 };
 
 struct Solver {

@@ -1,10 +1,14 @@
 #pragma once
 // Conjugate gradients on a Kokkos Kernels CRS matrix through Belos' PseudoBlockCGSolMgr,
 // with the vectors living (and all vector work running) on the chosen execution space.
+// When CG breaks down (an indefinite tangent near a limit point, or a preconditioner that
+// is not SPD) the solve restarts from the initial guess with Belos' BlockGmresSolMgr.
 #include <perishell/core/types.hpp>
+#include <perishell/solvers/belos/block_jacobi.hpp>
 #include <perishell/solvers/belos/crs_operator.hpp>
 #include <perishell/solvers/belos/kokkos_multivector.hpp>
 
+#include <BelosBlockGmresSolMgr.hpp>
 #include <BelosLinearProblem.hpp>
 #include <BelosMultiVec.hpp>
 #include <BelosOperator.hpp>
@@ -28,15 +32,36 @@ struct CgOptions {
   // (Belos' implicit residual, scaled by "Norm of Initial Residual", its default).
   double tolerance = 1e-10;
   int maxIterations = 1000;
-  enum class Preconditioner { None, Jacobi } preconditioner = Preconditioner::Jacobi;
+  enum class Preconditioner { None, Jacobi, BlockJacobi } preconditioner = Preconditioner::Jacobi;
+  // Rows per diagonal block for BlockJacobi: the DOF of one node (6 for a shell node).
+  int blockSize = 6;
+  // On a CG breakdown, restart from the initial guess with GMRES instead of throwing.
+  bool fallbackOnBreakdown = true;
+  // Krylov vectors GMRES builds before it restarts; it stores that many vectors of length n.
+  int gmresRestart = 200;
+  // GMRES from the start, for matrices known to be non-symmetric (the exact Newton tangent
+  // of a model loaded by moments).
+  bool gmresOnly = false;
 };
 
 struct CgResult {
   bool converged = false;
-  int iterations = 0;
+  int iterations = 0;  // of the method that produced x
   // Largest relative residual Belos measured at the end (its achievedTol()).
   double achievedTolerance = 0.0;
+  std::string method = "CG";  // "CG", or "GMRES" after a CG breakdown
+  std::string breakdown;      // why CG broke down when method is "GMRES", else empty
 };
+
+// The preconditioner names of the input deck: "none", "jacobi", "block-jacobi".
+inline CgOptions::Preconditioner preconditionerFromName(const std::string& name) {
+  using Preconditioner = CgOptions::Preconditioner;
+  if (name == "none") return Preconditioner::None;
+  if (name == "jacobi") return Preconditioner::Jacobi;
+  if (name == "block-jacobi") return Preconditioner::BlockJacobi;
+  throw std::invalid_argument("perishell::belos: unknown preconditioner '" + name +
+                              "'; valid names are none, jacobi, block-jacobi");
+}
 
 namespace detail {
 
@@ -52,12 +77,67 @@ inline std::string oneLine(const std::string& text) {
   return line;
 }
 
+template <class ExecutionSpaceT>
+Teuchos::RCP<const Belos::Operator<double>> makePreconditioner(const CrsMatrix<ExecutionSpaceT>& A,
+                                                               const CgOptions& options) {
+  switch (options.preconditioner) {
+    case CgOptions::Preconditioner::None: return Teuchos::null;
+    case CgOptions::Preconditioner::Jacobi: return Teuchos::rcp(new JacobiPreconditioner<ExecutionSpaceT>(A));
+    case CgOptions::Preconditioner::BlockJacobi:
+      return Teuchos::rcp(new BlockJacobiPreconditioner<ExecutionSpaceT>(A, options.blockSize));
+  }
+  throw std::invalid_argument("perishell::belos::solveCg: unknown preconditioner " +
+                              std::to_string(static_cast<int>(options.preconditioner)));
+}
+
+using LinearProblem = Belos::LinearProblem<double, Belos::MultiVec<double>, Belos::Operator<double>>;
+
+inline Teuchos::RCP<LinearProblem> makeProblem(const Teuchos::RCP<const Belos::Operator<double>>& A,
+                                               const Teuchos::RCP<Belos::MultiVec<double>>& X,
+                                               const Teuchos::RCP<const Belos::MultiVec<double>>& B,
+                                               const Teuchos::RCP<const Belos::Operator<double>>& preconditioner) {
+  const auto problem = Teuchos::rcp(new LinearProblem(A, X, B));
+  // Right preconditioning: CG applies whichever M is set in z = M r, and both CG's and
+  // GMRES' convergence tests then see unpreconditioned residuals. Left would also make
+  // setProblem() compute a preconditioned initial residual that CG never reads, and would
+  // make GMRES minimise the preconditioned residual instead of the true one.
+  if (!preconditioner.is_null()) problem->setRightPrec(preconditioner);
+  if (!problem->setProblem()) {
+    throw std::logic_error("perishell::belos::solveCg: Belos::LinearProblem::setProblem() refused the system");
+  }
+  return problem;
+}
+
+// Runs a Belos solver manager; translates its failures except CG's breakdown, which the
+// caller handles.
+template <class SolverManager>
+CgResult runSolver(SolverManager& solver, const std::string& method, const std::string& breakdown) {
+  Belos::ReturnType status = Belos::Unconverged;
+  try {
+    status = solver.solve();
+  } catch (const Belos::CGIterateFailure&) {
+    throw;
+  } catch (const Belos::StatusTestError& e) {
+    throw std::runtime_error("perishell::belos::solveCg: " + method +
+                             " broke down: the residual became NaN (NaN/Inf in A, b or x, or a singular "
+                             "system). Belos: " +
+                             oneLine(e.what()));
+  } catch (const Belos::BelosError& e) {
+    throw std::runtime_error("perishell::belos::solveCg: Belos " + method + " failed: " + oneLine(e.what()) +
+                             (breakdown.empty() ? "" : " (after " + breakdown + ")"));
+  }
+  return CgResult{status == Belos::Converged, solver.getNumIters(), solver.achievedTol(), method, breakdown};
+}
+
 }  // namespace detail
 
-// Solves A x = b for symmetric positive definite A. x holds the initial guess on entry and
-// the solution on return (also when CG did not converge); b is not modified. Both are used
-// in place, without copies. Throws std::invalid_argument for mismatched sizes and
-// std::runtime_error when CG breaks down (A or the preconditioner not SPD, NaN residual).
+// Solves A x = b, meant for symmetric positive definite A (CG). x holds the initial guess on
+// entry and the solution on return (also when the solver did not converge); b is not
+// modified. Both are used in place, without copies. When CG breaks down (A or the
+// preconditioner not SPD) and options.fallbackOnBreakdown is set, x is reset to the initial
+// guess and GMRES solves instead (result.method, result.breakdown say so); without it,
+// std::runtime_error. Throws std::invalid_argument for mismatched sizes or options,
+// std::runtime_error for a NaN residual or a preconditioner that cannot be built.
 template <class ExecutionSpaceT>
 CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
                  const Kokkos::View<const double*, typename ExecutionSpaceT::memory_space>& b,
@@ -80,7 +160,11 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
                                 std::to_string(options.tolerance) + " and " +
                                 std::to_string(options.maxIterations));
   }
-  if (n == 0) return CgResult{true, 0, 0.0};
+  if ((options.fallbackOnBreakdown || options.gmresOnly) && options.gmresRestart < 1) {
+    throw std::invalid_argument("perishell::belos::solveCg: gmresRestart must be at least 1, got " +
+                                std::to_string(options.gmresRestart));
+  }
+  if (n == 0) return CgResult{true, 0, 0.0, "CG", ""};
   if (x.data() < b.data() + n && b.data() < x.data() + n) {
     throw std::invalid_argument("perishell::belos::solveCg: x and b share storage");
   }
@@ -92,46 +176,47 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
   const Teuchos::RCP<MV> X = Teuchos::rcp(new KokkosMultiVector<ExecutionSpaceT>(x2d));
   const Teuchos::RCP<const MV> B = Teuchos::rcp(new KokkosMultiVector<ExecutionSpaceT>(b2d));
   const Teuchos::RCP<const OP> op = Teuchos::rcp(new CrsOperator<ExecutionSpaceT>(A));
+  const Teuchos::RCP<const OP> preconditioner = detail::makePreconditioner(A, options);
 
-  const auto problem = Teuchos::rcp(new Belos::LinearProblem<double, MV, OP>(op, X, B));
-  if (options.preconditioner == CgOptions::Preconditioner::Jacobi) {
-    // Belos' CG iterations apply whichever preconditioner is set as M in z = M r, and the
-    // default convergence test ("Norm of Initial Residual") uses unpreconditioned residuals
-    // either way. Left would also make setProblem() compute a preconditioned initial
-    // residual that this configuration never reads; right skips that apply.
-    problem->setRightPrec(Teuchos::rcp(new JacobiPreconditioner<ExecutionSpaceT>(A)));
-  }
-  if (!problem->setProblem()) {
-    throw std::logic_error("perishell::belos::solveCg: Belos::LinearProblem::setProblem() refused the system");
+  // CG overwrites x as it goes; the fallback restarts from the caller's guess.
+  VectorView<memory_space> initialGuess;
+  if (options.fallbackOnBreakdown) {
+    initialGuess = VectorView<memory_space>(
+        Kokkos::view_alloc(Kokkos::WithoutInitializing, "perishell::belos::initial_guess"), n);
+    Kokkos::deep_copy(initialGuess, x);
   }
 
   const auto params = Teuchos::parameterList("perishell CG");
   params->set("Convergence Tolerance", options.tolerance);
   params->set("Maximum Iterations", options.maxIterations);
 
-  Belos::PseudoBlockCGSolMgr<double, MV, OP> solver(problem, params);
-  Belos::ReturnType status = Belos::Unconverged;
-  try {
-    status = solver.solve();
+  std::string breakdown;
+  if (!options.gmresOnly) try {
+    Belos::PseudoBlockCGSolMgr<double, MV, OP> cg(detail::makeProblem(op, X, B, preconditioner), params);
+    const CgResult result = detail::runSolver(cg, "CG", "");
+    // x2d aliases x, and CGIter writes the iterate straight into X; the fence makes the
+    // result visible to the caller's next host access.
+    ExecutionSpaceT().fence();
+    return result;
   } catch (const Belos::CGIterateFailure& e) {
-    throw std::runtime_error(
-        "perishell::belos::solveCg: CG broke down: the matrix or the preconditioner is not symmetric "
-        "positive definite (the step length r^T M r / p^T A p was not positive). Belos: " +
-        detail::oneLine(e.what()));
-  } catch (const Belos::StatusTestError& e) {
-    throw std::runtime_error(
-        "perishell::belos::solveCg: CG broke down: the residual became NaN (NaN/Inf in A, b or x, "
-        "or a singular system). Belos: " +
-        detail::oneLine(e.what()));
-  } catch (const Belos::BelosError& e) {
-    throw std::runtime_error("perishell::belos::solveCg: Belos CG failed: " +
-                             detail::oneLine(e.what()));
+    breakdown =
+        "CG broke down: the matrix or the preconditioner is not symmetric positive definite (the step "
+        "length r^T M r / p^T A p was not positive). Belos: " +
+        detail::oneLine(e.what());
+    if (!options.fallbackOnBreakdown) throw std::runtime_error("perishell::belos::solveCg: " + breakdown);
   }
 
-  // x2d aliases x, and CGIter writes the iterate straight into X; the fence makes the
-  // result visible to the caller's next host access.
+  if (initialGuess.extent(0) == n) Kokkos::deep_copy(x, initialGuess);
+  const auto gmresParams = Teuchos::parameterList("perishell GMRES");
+  gmresParams->set("Convergence Tolerance", options.tolerance);
+  gmresParams->set("Maximum Iterations", options.maxIterations);
+  gmresParams->set("Num Blocks", options.gmresRestart);
+  // Enough restarts that the iteration limit, not the restart count, ends the solve.
+  gmresParams->set("Maximum Restarts", options.maxIterations / options.gmresRestart + 1);
+  Belos::BlockGmresSolMgr<double, MV, OP> gmres(detail::makeProblem(op, X, B, preconditioner), gmresParams);
+  const CgResult result = detail::runSolver(gmres, "GMRES", breakdown);
   ExecutionSpaceT().fence();
-  return CgResult{status == Belos::Converged, solver.getNumIters(), solver.achievedTol()};
+  return result;
 }
 
 }  // namespace perishell::belos

@@ -1,0 +1,557 @@
+#pragma once
+// The CCM shell element (model.md §4, §5; paper eq. 34-35): a 4-node flat shell with
+//  - a bilinear membrane (2x2 Gauss) and a drilling rotation tied to the in-plane rotation
+//    by a penalty,
+//  - Reissner-Mindlin bending (2x2 Gauss) with the MITC4 assumed transverse shear of
+//    Bathe & Dvorkin (1985): covariant shear strains tied at the edge midpoints, so a thin
+//    shell does not lock in shear,
+//  - isotropic plane stress,
+// made geometrically nonlinear by a corotational formulation that is energy-consistent:
+// the element energy is W = 1/2 d^T K_l d, with K_l the linear stiffness in the element's
+// flat reference frame and d the deformational DOF (rigid motions of any size removed), and
+// the internal force and tangent are its exact first and second derivatives, taken by
+// forward-mode automatic differentiation (core/dual.hpp). The tangent is B^T K_l B (paper
+// K_L) plus sum_i (K_l d)_i d2 d_i/dq dq (paper K_S); there is no separate K_N (eq. 35).
+//
+// Conventions. Nodes are counter-clockwise about the element normal. Element DOF order:
+// node a's ux uy uz (global translations), then its phi_x phi_y phi_z (spatial rotation
+// increments: R_a <- exp(phi) R_a, model.md §5), for a = 0..3. Local (element-frame) DOF
+// use the same order: u v w theta_x theta_y theta_z. Forces are internal resisting forces
+// (equilibrium: f = external load).
+//
+// All functions are written once for host and device on small fixed arrays. Limit: a
+// warped reference element is projected onto its flat frame for K_l (no warping
+// correction: it is as accurate as its flat projection); rigid motions still cost no
+// energy, because d removes them exactly for any element.
+#include <perishell/core/dual.hpp>
+#include <perishell/core/rotation.hpp>
+#include <perishell/mesh/bilinear_quad.hpp>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace perishell::shell {
+
+// Isotropic plane-stress section.
+struct ShellSection {
+  double youngModulus = 0.0;          // E [Pa]
+  double poissonRatio = 0.0;          // nu [-]
+  double thickness = 0.0;             // t [m]
+  double shearCorrection = 5.0 / 6.0;  // kappa of the transverse shear stiffness kappa G t
+  // Drilling penalty: energy 1/2 (drillingFactor G t) * integral of (theta_z - omega)^2 dA,
+  // omega = 1/2 (dv/dx - du/dy), integrated at the 2x2 Gauss points: at the centre alone
+  // the four theta_z would share one constraint and a checkerboard of theta_z would cost
+  // no energy on a regular mesh (a singular tangent). It only has to make theta_z
+  // non-singular without stiffening the membrane: 1e-3 leaves the patch tests exact
+  // (theta_z = omega there) and keeps the drilling stiffness far below the membrane's.
+  double drillingFactor = 1e-3;
+};
+
+constexpr int shellNodeCount = 4;
+constexpr int shellDofCount = 24;
+// Generalised strains at a point, in the element frame: membrane eps_xx eps_yy gamma_xy;
+// curvatures kappa_xx kappa_yy kappa_xy (engineering); transverse shear gamma_xz gamma_yz;
+// drilling mismatch theta_z - omega.
+constexpr int shellStrainCount = 9;
+
+// Host checks (bad input gets a message naming the item and the reason).
+inline void checkShellSection(const ShellSection& section) {
+  if (!(section.youngModulus > 0.0) || !std::isfinite(section.youngModulus))
+    throw std::invalid_argument("shell section: young modulus must be positive, got " +
+                                std::to_string(section.youngModulus));
+  if (!(section.poissonRatio > -1.0 && section.poissonRatio < 0.5))
+    throw std::invalid_argument("shell section: poisson ratio must lie in (-1, 0.5), got " +
+                                std::to_string(section.poissonRatio));
+  if (!(section.thickness > 0.0) || !std::isfinite(section.thickness))
+    throw std::invalid_argument("shell section: thickness must be positive, got " +
+                                std::to_string(section.thickness));
+  if (!(section.shearCorrection > 0.0) || !std::isfinite(section.shearCorrection))
+    throw std::invalid_argument("shell section: shear correction must be positive, got " +
+                                std::to_string(section.shearCorrection));
+  if (!(section.drillingFactor > 0.0) || !std::isfinite(section.drillingFactor))
+    throw std::invalid_argument("shell section: drilling factor must be positive, got " +
+                                std::to_string(section.drillingFactor));
+}
+
+namespace detail {
+
+// Corotational frame (model.md §5) as rows e1 e2 e3, and the centroid: e3 along the cross
+// product of the diagonals, e1 along the mean of the two xi-direction edges made orthogonal
+// to e3, e2 = e3 x e1. Built from cross products and lengths only, so it rotates with the
+// nodes: a rigid motion leaves the local coordinates unchanged.
+template <class T>
+KOKKOS_INLINE_FUNCTION void corotationalFrame(const T x[4][3], T frame[3][3], T centroid[3]) {
+  T diagonal13[3], diagonal24[3], along[3];
+  for (int k = 0; k < 3; ++k) {
+    centroid[k] = 0.25 * (x[0][k] + x[1][k] + x[2][k] + x[3][k]);
+    diagonal13[k] = x[2][k] - x[0][k];
+    diagonal24[k] = x[3][k] - x[1][k];
+    along[k] = x[1][k] + x[2][k] - x[0][k] - x[3][k];
+  }
+  rotation::cross(diagonal13, diagonal24, frame[2]);
+  rotation::normalise(frame[2]);
+  const T normalPart = rotation::dot(along, frame[2]);
+  for (int k = 0; k < 3; ++k) frame[0][k] = along[k] - normalPart * frame[2][k];
+  rotation::normalise(frame[0]);
+  rotation::cross(frame[2], frame[0], frame[1]);
+}
+
+}  // namespace detail
+
+// The element's reference geometry: frame E0 (rows) and the nodes' coordinates in it,
+// E0^T (X_a - X_c). The third coordinate is the warp; the stiffness uses the projection.
+struct ShellReference {
+  double frame[3][3];
+  double local[4][3];
+};
+
+KOKKOS_INLINE_FUNCTION ShellReference shellReference(const double referencePositions[4][3]) {
+  ShellReference reference{};
+  double centroid[3];
+  detail::corotationalFrame(referencePositions, reference.frame, centroid);
+  for (int a = 0; a < 4; ++a)
+    for (int i = 0; i < 3; ++i) {
+      double sum = 0.0;
+      for (int k = 0; k < 3; ++k) sum += reference.frame[i][k] * (referencePositions[a][k] - centroid[k]);
+      reference.local[a][i] = sum;
+    }
+  return reference;
+}
+
+// Area of the flat (projected) quad: half the length of the diagonals' cross product.
+KOKKOS_INLINE_FUNCTION double shellReferenceArea(const double referencePositions[4][3]) {
+  double diagonal13[3], diagonal24[3], normal[3];
+  for (int k = 0; k < 3; ++k) {
+    diagonal13[k] = referencePositions[2][k] - referencePositions[0][k];
+    diagonal24[k] = referencePositions[3][k] - referencePositions[1][k];
+  }
+  rotation::cross(diagonal13, diagonal24, normal);
+  return 0.5 * rotation::norm(normal);
+}
+
+// Rejects an element the formulation cannot represent: non-finite coordinates, (near) zero
+// area, or a corner where the bilinear map folds (non-convex, bow-tie, or nodes not in
+// counter-clockwise order around a convex outline). `element` names it in the message.
+inline void checkShellElement(const double referencePositions[4][3], long element) {
+  const std::string name = "shell element " + std::to_string(element) + ": ";
+  for (int a = 0; a < 4; ++a)
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(referencePositions[a][k]))
+        throw std::invalid_argument(name + "node " + std::to_string(a) + " has a non-finite coordinate");
+  double diagonalLengthProduct = 1.0;
+  for (int pair = 0; pair < 2; ++pair) {
+    double squared = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double component = referencePositions[pair + 2][k] - referencePositions[pair][k];
+      squared += component * component;
+    }
+    diagonalLengthProduct *= std::sqrt(squared);
+  }
+  const double area = shellReferenceArea(referencePositions);
+  // A collinear or coincident layout leaves the normal (and the frame) undefined.
+  if (!(area > 1e-12 * diagonalLengthProduct))
+    throw std::invalid_argument(name + "zero or negative area (" + std::to_string(area) +
+                                " m^2): collinear or coincident nodes");
+  const ShellReference reference = shellReference(referencePositions);
+  for (int a = 0; a < 4; ++a) {
+    const int next = (a + 1) % 4, previous = (a + 3) % 4;
+    const double toNext[2] = {reference.local[next][0] - reference.local[a][0],
+                              reference.local[next][1] - reference.local[a][1]};
+    const double toPrevious[2] = {reference.local[previous][0] - reference.local[a][0],
+                                  reference.local[previous][1] - reference.local[a][1]};
+    // Twice the corner triangle's area: the Jacobian determinant of the bilinear map there.
+    const double cornerArea = toNext[0] * toPrevious[1] - toNext[1] * toPrevious[0];
+    if (!(cornerArea > 1e-8 * area))
+      throw std::invalid_argument(name + "zero or negative area at corner " + std::to_string(a) +
+                                  " (non-convex or twisted quad; nodes must be counter-clockwise)");
+  }
+}
+
+// Generalised strain-displacement matrix at (xi, eta) in the element frame: strains =
+// B d_local (shellStrainCount rows, order above). Returns the Jacobian determinant.
+// Membrane and bending: bilinear interpolation of u v w and of the rotations. The normal's
+// rotation is beta = theta x e3, i.e. beta_x = theta_y, beta_y = -theta_x.
+// Transverse shear (MITC4): the covariant strains e_xi = gamma . dx/dxi and
+// e_eta = gamma . dx/deta are evaluated at the edge midpoints (0, +-1) and (+-1, 0),
+// interpolated linearly across the element, and mapped back by gamma = J^-1 (e_xi, e_eta).
+KOKKOS_INLINE_FUNCTION double shellStrainDisplacement(const ShellReference& reference, double xi, double eta,
+                                                      double B[shellStrainCount][shellDofCount]) {
+  using mesh::bilinear::nodeEta;
+  using mesh::bilinear::nodeXi;
+  const auto& x = reference.local;
+  for (int r = 0; r < shellStrainCount; ++r)
+    for (int c = 0; c < shellDofCount; ++c) B[r][c] = 0.0;
+
+  double shape[4], dShapeDxi[4], dShapeDeta[4];
+  double jacobian[2][2] = {{0.0, 0.0}, {0.0, 0.0}};  // rows: d(x, y)/dxi, d(x, y)/deta
+  for (int a = 0; a < 4; ++a) {
+    shape[a] = 0.25 * (1.0 + nodeXi(a) * xi) * (1.0 + nodeEta(a) * eta);
+    dShapeDxi[a] = 0.25 * nodeXi(a) * (1.0 + nodeEta(a) * eta);
+    dShapeDeta[a] = 0.25 * nodeEta(a) * (1.0 + nodeXi(a) * xi);
+    for (int k = 0; k < 2; ++k) {
+      jacobian[0][k] += dShapeDxi[a] * x[a][k];
+      jacobian[1][k] += dShapeDeta[a] * x[a][k];
+    }
+  }
+  const double determinant = jacobian[0][0] * jacobian[1][1] - jacobian[0][1] * jacobian[1][0];
+  const double inverse[2][2] = {{jacobian[1][1] / determinant, -jacobian[0][1] / determinant},
+                                {-jacobian[1][0] / determinant, jacobian[0][0] / determinant}};
+
+  // Covariant shear rows at the four tying points: A (0, 1), C (0, -1) give e_xi;
+  // B (1, 0), D (-1, 0) give e_eta.
+  const double tyingXi[4] = {0.0, 0.0, 1.0, -1.0};
+  const double tyingEta[4] = {1.0, -1.0, 0.0, 0.0};
+  const double tyingWeight[4] = {0.5 * (1.0 + eta), 0.5 * (1.0 - eta), 0.5 * (1.0 + xi), 0.5 * (1.0 - xi)};
+  double covariantShear[2][shellDofCount] = {};
+  for (int p = 0; p < 4; ++p) {
+    const int direction = p < 2 ? 0 : 1;  // 0: e_xi, 1: e_eta
+    double tangent[2] = {0.0, 0.0};
+    double pointShape[4], pointDerivative[4];
+    for (int a = 0; a < 4; ++a) {
+      pointShape[a] = 0.25 * (1.0 + nodeXi(a) * tyingXi[p]) * (1.0 + nodeEta(a) * tyingEta[p]);
+      pointDerivative[a] = direction == 0 ? 0.25 * nodeXi(a) * (1.0 + nodeEta(a) * tyingEta[p])
+                                          : 0.25 * nodeEta(a) * (1.0 + nodeXi(a) * tyingXi[p]);
+      for (int k = 0; k < 2; ++k) tangent[k] += pointDerivative[a] * x[a][k];
+    }
+    for (int a = 0; a < 4; ++a) {
+      // e = dw/ds + beta . dx/ds with beta_x = theta_y, beta_y = -theta_x.
+      covariantShear[direction][6 * a + 2] += tyingWeight[p] * pointDerivative[a];
+      covariantShear[direction][6 * a + 3] -= tyingWeight[p] * pointShape[a] * tangent[1];
+      covariantShear[direction][6 * a + 4] += tyingWeight[p] * pointShape[a] * tangent[0];
+    }
+  }
+
+  for (int a = 0; a < 4; ++a) {
+    const double dx = inverse[0][0] * dShapeDxi[a] + inverse[0][1] * dShapeDeta[a];
+    const double dy = inverse[1][0] * dShapeDxi[a] + inverse[1][1] * dShapeDeta[a];
+    const int u = 6 * a, v = u + 1, thetaX = u + 3, thetaY = u + 4, thetaZ = u + 5;
+    B[0][u] = dx;
+    B[1][v] = dy;
+    B[2][u] = dy;
+    B[2][v] = dx;
+    B[3][thetaY] = dx;   // kappa_xx = d beta_x / dx
+    B[4][thetaX] = -dy;  // kappa_yy = d beta_y / dy
+    B[5][thetaY] = dy;   // kappa_xy = d beta_x / dy + d beta_y / dx
+    B[5][thetaX] = -dx;
+    B[8][thetaZ] = shape[a];  // theta_z - 1/2 (dv/dx - du/dy)
+    B[8][u] = 0.5 * dy;
+    B[8][v] = -0.5 * dx;
+  }
+  for (int c = 0; c < shellDofCount; ++c) {
+    B[6][c] = inverse[0][0] * covariantShear[0][c] + inverse[0][1] * covariantShear[1][c];
+    B[7][c] = inverse[1][0] * covariantShear[0][c] + inverse[1][1] * covariantShear[1][c];
+  }
+  return determinant;
+}
+
+// Section stiffness on the generalised strains (diagonal blocks): membrane E t/(1-nu^2)
+// [1 nu 0; nu 1 0; 0 0 (1-nu)/2], bending the same times t^2/12, shear kappa G t, drilling
+// drillingFactor G t (model.md §4).
+KOKKOS_INLINE_FUNCTION void shellSectionStiffness(const ShellSection& section,
+                                                  double D[shellStrainCount][shellStrainCount]) {
+  const double E = section.youngModulus, nu = section.poissonRatio, t = section.thickness;
+  const double membrane = E * t / (1.0 - nu * nu);
+  const double bending = membrane * t * t / 12.0;
+  const double shearModulus = E / (2.0 * (1.0 + nu));
+  for (int r = 0; r < shellStrainCount; ++r)
+    for (int c = 0; c < shellStrainCount; ++c) D[r][c] = 0.0;
+  for (int block = 0; block < 2; ++block) {
+    const int o = 3 * block;
+    const double scale = block == 0 ? membrane : bending;
+    D[o][o] = D[o + 1][o + 1] = scale;
+    D[o][o + 1] = D[o + 1][o] = scale * nu;
+    D[o + 2][o + 2] = scale * 0.5 * (1.0 - nu);
+  }
+  D[6][6] = D[7][7] = section.shearCorrection * shearModulus * t;
+  D[8][8] = section.drillingFactor * shearModulus * t;
+}
+
+// Linear stiffness K_l (24x24) in the element's flat reference frame, 2x2 Gauss for every
+// term. Depends on the reference geometry only: the caller may cache it per element.
+KOKKOS_INLINE_FUNCTION void shellLocalStiffness(const double referencePositions[4][3], const ShellSection& section,
+                                                double localStiffness[shellDofCount][shellDofCount]) {
+  const ShellReference reference = shellReference(referencePositions);
+  double D[shellStrainCount][shellStrainCount];
+  shellSectionStiffness(section, D);
+  for (int r = 0; r < shellDofCount; ++r)
+    for (int c = 0; c < shellDofCount; ++c) localStiffness[r][c] = 0.0;
+  for (int q = 0; q < mesh::bilinear::numGaussPoints; ++q) {
+    double B[shellStrainCount][shellDofCount];
+    const double weight =
+        shellStrainDisplacement(reference, mesh::bilinear::gaussXi(q), mesh::bilinear::gaussEta(q), B);
+    for (int c = 0; c < shellDofCount; ++c) {
+      double stress[shellStrainCount];  // D B e_c, times the Gauss weight
+      for (int s = 0; s < shellStrainCount; ++s) {
+        double sum = 0.0;
+        for (int k = 0; k < shellStrainCount; ++k) sum += D[s][k] * B[k][c];
+        stress[s] = weight * sum;
+      }
+      for (int r = 0; r <= c; ++r) {
+        double sum = 0.0;
+        for (int s = 0; s < shellStrainCount; ++s) sum += B[s][r] * stress[s];
+        localStiffness[r][c] += sum;
+      }
+    }
+  }
+  for (int c = 0; c < shellDofCount; ++c)
+    for (int r = c + 1; r < shellDofCount; ++r) localStiffness[r][c] = localStiffness[c][r];
+}
+
+namespace detail {
+
+// Local translation of node a: E^T (x_a - x_c) - E0^T (X_a - X_c).
+template <class T>
+KOKKOS_INLINE_FUNCTION void localTranslation(const T frame[3][3], const T centroid[3], const T position[3],
+                                             const double referenceLocal[3], T out[3]) {
+  for (int i = 0; i < 3; ++i) {
+    T sum = frame[i][0] * (position[0] - centroid[0]);
+    for (int k = 1; k < 3; ++k) sum += frame[i][k] * (position[k] - centroid[k]);
+    out[i] = sum - referenceLocal[i];
+  }
+}
+
+// Local rotation of a node: log(E^T R E0) (model.md §5).
+template <class T, class RotationT>
+KOKKOS_INLINE_FUNCTION void localRotation(const T frame[3][3], const RotationT R[3][3],
+                                          const double referenceFrame[3][3], T theta[3]) {
+  RotationT rotatedAxes[3][3];  // column j: R e0_j
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 3; ++j)
+      rotatedAxes[k][j] = R[k][0] * referenceFrame[j][0] + R[k][1] * referenceFrame[j][1] + R[k][2] * referenceFrame[j][2];
+  T relative[3][3];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      relative[i][j] = frame[i][0] * rotatedAxes[0][j] + frame[i][1] * rotatedAxes[1][j] + frame[i][2] * rotatedAxes[2][j];
+  rotation::logarithm(relative, theta);
+}
+
+// The 24 deformational DOF d (local translations and rotations per node).
+template <class T, class RotationT>
+KOKKOS_INLINE_FUNCTION void deformationalDofs(const ShellReference& reference, const T x[4][3],
+                                              const RotationT rotations[4][3][3], T d[shellDofCount]) {
+  T frame[3][3], centroid[3];
+  corotationalFrame(x, frame, centroid);
+  for (int a = 0; a < 4; ++a) {
+    localTranslation(frame, centroid, x[a], reference.local[a], &d[6 * a]);
+    localRotation(frame, rotations[a], reference.frame, &d[6 * a + 3]);
+  }
+}
+
+// Column j of B = dd/dq by one forward-mode pass. A translation moves the frame and so
+// every entry; a rotation increment of node a changes only theta_a.
+KOKKOS_INLINE_FUNCTION void deformationalGradientColumn(const ShellReference& reference, const double x[4][3],
+                                                        const double rotations[4][3][3], const double frame[3][3],
+                                                        int j, double column[shellDofCount]) {
+  using D = Dual<double>;
+  const int node = j / 6, component = j % 6;
+  if (component < 3) {
+    D seeded[4][3];
+    for (int a = 0; a < 4; ++a)
+      for (int k = 0; k < 3; ++k) seeded[a][k] = D(x[a][k], a == node && k == component ? 1.0 : 0.0);
+    D d[shellDofCount];
+    deformationalDofs(reference, seeded, rotations, d);
+    for (int i = 0; i < shellDofCount; ++i) column[i] = d[i].derivative;
+    return;
+  }
+  for (int i = 0; i < shellDofCount; ++i) column[i] = 0.0;
+  D phi[3], rotated[3][3], constantFrame[3][3], theta[3];
+  for (int k = 0; k < 3; ++k) phi[k] = D(0.0, k == component - 3 ? 1.0 : 0.0);
+  rotation::rotateBySpatialIncrementToSecondOrder(phi, rotations[node], rotated);
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k) constantFrame[r][k] = frame[r][k];
+  localRotation(constantFrame, rotated, reference.frame, theta);
+  for (int k = 0; k < 3; ++k) column[6 * node + 3 + k] = theta[k].derivative;
+}
+
+KOKKOS_INLINE_FUNCTION void addSymmetricPair(double tangent[shellDofCount][shellDofCount], int j, int k, double value) {
+  tangent[j][k] += value;
+  if (j != k) tangent[k][j] += value;
+}
+
+// Adds sum_i s_i d2 d_i / dq_j dq_k (paper K_S) for fixed s = K_l d, as the Hessian of the
+// scalar s . d(q), one pair of directions per Dual<Dual> pass (inner derivative: q_j,
+// outer: q_k). Pairs of rotations of different nodes vanish; a rotation pair of one node
+// changes only that node's theta; a translation-rotation pair needs the seeded frame and
+// one theta.
+KOKKOS_INLINE_FUNCTION void addInitialStressStiffness(const ShellReference& reference, const double x[4][3],
+                                                      const double rotations[4][3][3], const double frame[3][3],
+                                                      const double s[shellDofCount],
+                                                      double tangent[shellDofCount][shellDofCount]) {
+  using DD = Dual<Dual<double>>;
+  for (int j = 0; j < shellDofCount; ++j) {
+    if (j % 6 >= 3) continue;
+    for (int k = j; k < shellDofCount; ++k) {
+      if (k % 6 >= 3) continue;
+      DD seeded[4][3];
+      for (int a = 0; a < 4; ++a)
+        for (int c = 0; c < 3; ++c) seeded[a][c] = DD(x[a][c]);
+      seeded[j / 6][j % 6].value.derivative = 1.0;
+      seeded[k / 6][k % 6].derivative.value = 1.0;
+      DD d[shellDofCount];
+      deformationalDofs(reference, seeded, rotations, d);
+      double sum = 0.0;
+      for (int i = 0; i < shellDofCount; ++i) sum += s[i] * d[i].derivative.derivative;
+      addSymmetricPair(tangent, j, k, sum);
+    }
+  }
+  for (int j = 0; j < shellDofCount; ++j) {
+    if (j % 6 >= 3) continue;
+    DD seeded[4][3], seededFrame[3][3], centroid[3];
+    for (int a = 0; a < 4; ++a)
+      for (int c = 0; c < 3; ++c) seeded[a][c] = DD(x[a][c]);
+    seeded[j / 6][j % 6].derivative.value = 1.0;
+    corotationalFrame(seeded, seededFrame, centroid);
+    for (int a = 0; a < 4; ++a)
+      for (int c = 0; c < 3; ++c) {
+        DD phi[3] = {DD(0.0), DD(0.0), DD(0.0)};
+        phi[c].value.derivative = 1.0;
+        DD rotated[3][3], theta[3];
+        rotation::rotateBySpatialIncrementToSecondOrder(phi, rotations[a], rotated);
+        localRotation(seededFrame, rotated, reference.frame, theta);
+        double sum = 0.0;
+        for (int m = 0; m < 3; ++m) sum += s[6 * a + 3 + m] * theta[m].derivative.derivative;
+        addSymmetricPair(tangent, j, 6 * a + 3 + c, sum);
+      }
+  }
+  DD constantFrame[3][3];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) constantFrame[r][c] = DD(frame[r][c]);
+  for (int a = 0; a < 4; ++a)
+    for (int c = 0; c < 3; ++c)
+      for (int e = c; e < 3; ++e) {
+        DD phi[3] = {DD(0.0), DD(0.0), DD(0.0)};
+        phi[c].value.derivative = 1.0;
+        phi[e].derivative.value = 1.0;
+        DD rotated[3][3], theta[3];
+        rotation::rotateBySpatialIncrementToSecondOrder(phi, rotations[a], rotated);
+        localRotation(constantFrame, rotated, reference.frame, theta);
+        double sum = 0.0;
+        for (int m = 0; m < 3; ++m) sum += s[6 * a + 3 + m] * theta[m].derivative.derivative;
+        addSymmetricPair(tangent, 6 * a + 3 + c, 6 * a + 3 + e, sum);
+      }
+}
+
+// Everything force and tangent share: reference, current frame, d and s = K_l d.
+struct ShellState {
+  ShellReference reference;
+  double frame[3][3];
+  double d[shellDofCount];
+  double s[shellDofCount];
+  double energy;
+};
+
+KOKKOS_INLINE_FUNCTION void evaluateState(const double referencePositions[4][3], const double positions[4][3],
+                                          const double rotations[4][3][3],
+                                          const double localStiffness[shellDofCount][shellDofCount],
+                                          ShellState& state) {
+  state.reference = shellReference(referencePositions);
+  double centroid[3];
+  corotationalFrame(positions, state.frame, centroid);
+  deformationalDofs(state.reference, positions, rotations, state.d);
+  state.energy = 0.0;
+  for (int r = 0; r < shellDofCount; ++r) {
+    double sum = 0.0;
+    for (int c = 0; c < shellDofCount; ++c) sum += localStiffness[r][c] * state.d[c];
+    state.s[r] = sum;
+    state.energy += 0.5 * sum * state.d[r];
+  }
+}
+
+}  // namespace detail
+
+// Deformational DOF d (local translations and rotations, model.md §5); zero for any rigid
+// motion of the reference element. `rotations` are the nodes' finite rotations (reference
+// to current).
+KOKKOS_INLINE_FUNCTION void shellDeformationalDofs(const double referencePositions[4][3], const double positions[4][3],
+                                                   const double rotations[4][3][3], double d[shellDofCount]) {
+  const ShellReference reference = shellReference(referencePositions);
+  detail::deformationalDofs(reference, positions, rotations, d);
+}
+
+// Generalised strains (order: shellStrainCount) at (xi, eta) from local DOF d_local (the
+// deformational DOF, or for a linear check E0^T u per node).
+KOKKOS_INLINE_FUNCTION void shellLocalStrains(const double referencePositions[4][3], const double localDofs[shellDofCount],
+                                              double xi, double eta, double strains[shellStrainCount]) {
+  const ShellReference reference = shellReference(referencePositions);
+  double B[shellStrainCount][shellDofCount];
+  shellStrainDisplacement(reference, xi, eta, B);
+  for (int r = 0; r < shellStrainCount; ++r) {
+    double sum = 0.0;
+    for (int c = 0; c < shellDofCount; ++c) sum += B[r][c] * localDofs[c];
+    strains[r] = sum;
+  }
+}
+
+// Internal force f = dW/dq = B^T K_l d (global translations, then spatial moments per
+// node); returns the element energy W = 1/2 d^T K_l d.
+KOKKOS_INLINE_FUNCTION double shellInternalForce(const double referencePositions[4][3], const double positions[4][3],
+                                                 const double rotations[4][3][3],
+                                                 const double localStiffness[shellDofCount][shellDofCount],
+                                                 double force[shellDofCount]) {
+  detail::ShellState state;
+  detail::evaluateState(referencePositions, positions, rotations, localStiffness, state);
+  for (int j = 0; j < shellDofCount; ++j) {
+    double column[shellDofCount];
+    detail::deformationalGradientColumn(state.reference, positions, rotations, state.frame, j, column);
+    double sum = 0.0;
+    for (int i = 0; i < shellDofCount; ++i) sum += state.s[i] * column[i];
+    force[j] = sum;
+  }
+  return state.energy;
+}
+
+// Internal force (as shellInternalForce) and the symmetric tangent K_T = d2W/dq2 =
+// B^T K_l B + sum_i (K_l d)_i d2 d_i/dq2 (paper K_L + K_S). K_T is the symmetric part of the
+// derivative of f under the multiplicative update R <- exp(dphi) R; addRotationAsymmetry
+// gives that derivative itself. Returns W.
+KOKKOS_INLINE_FUNCTION double shellTangent(const double referencePositions[4][3], const double positions[4][3],
+                                           const double rotations[4][3][3],
+                                           const double localStiffness[shellDofCount][shellDofCount],
+                                           double force[shellDofCount], double tangent[shellDofCount][shellDofCount]) {
+  detail::ShellState state;
+  detail::evaluateState(referencePositions, positions, rotations, localStiffness, state);
+  double columns[shellDofCount][shellDofCount];  // columns[j] = dd/dq_j
+  for (int j = 0; j < shellDofCount; ++j) {
+    detail::deformationalGradientColumn(state.reference, positions, rotations, state.frame, j, columns[j]);
+    double sum = 0.0;
+    for (int i = 0; i < shellDofCount; ++i) sum += state.s[i] * columns[j][i];
+    force[j] = sum;
+  }
+  for (int k = 0; k < shellDofCount; ++k) {
+    double stiffnessTimesColumn[shellDofCount];
+    for (int r = 0; r < shellDofCount; ++r) {
+      double sum = 0.0;
+      for (int c = 0; c < shellDofCount; ++c) sum += localStiffness[r][c] * columns[k][c];
+      stiffnessTimesColumn[r] = sum;
+    }
+    for (int j = 0; j <= k; ++j) {
+      double sum = 0.0;
+      for (int i = 0; i < shellDofCount; ++i) sum += columns[j][i] * stiffnessTimesColumn[i];
+      tangent[j][k] = sum;
+      tangent[k][j] = sum;
+    }
+  }
+  detail::addInitialStressStiffness(state.reference, positions, rotations, state.frame, state.s, tangent);
+  return state.energy;
+}
+
+// Turns the symmetric K_T into the exact derivative of f under R_a <- exp(dphi_a) R_a
+// (pd::TangentForm::Exact's convention): df_phi_a/dphi_a = K_T - 1/2 skew(m_a), m_a the
+// node's moment in f. Non-symmetric; summed over elements at equilibrium the term is
+// -1/2 skew(applied moment), so it vanishes where no moment is applied.
+KOKKOS_INLINE_FUNCTION void addRotationAsymmetry(const double force[shellDofCount],
+                                                 double tangent[shellDofCount][shellDofCount]) {
+  for (int a = 0; a < 4; ++a) {
+    const int o = 6 * a + 3;
+    const double m[3] = {force[o], force[o + 1], force[o + 2]};
+    tangent[o][o + 1] += 0.5 * m[2];
+    tangent[o][o + 2] -= 0.5 * m[1];
+    tangent[o + 1][o] -= 0.5 * m[2];
+    tangent[o + 1][o + 2] += 0.5 * m[0];
+    tangent[o + 2][o] += 0.5 * m[1];
+    tangent[o + 2][o + 1] -= 0.5 * m[0];
+  }
+}
+
+}  // namespace perishell::shell

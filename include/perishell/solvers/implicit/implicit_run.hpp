@@ -1,0 +1,26 @@
+#pragma once
+// `perishell run` for an implicit deck: model -> shell elements or PD bonds, loads and
+// supports on the device -> Newton load increments (solvers/implicit/static_newton.hpp) with
+// progress -> XDMF fields every output.every increments, a CSV history row per increment ->
+// a summary table. Only converged increments copy data to the host.
+#include <perishell/model/model.hpp>
+
+#include <iosfwd>
+#include <string>
+
+namespace perishell::solvers {
+
+struct ImplicitRunSummary {
+  int increments = 0;
+  int cuts = 0;
+  long long newtonIterations = 0, linearIterations = 0;
+  double wallSeconds = 0.0;
+  double maxDisplacement = 0.0;  // largest |u| of a node at the end [m]
+  std::string xdmfPath, historyPath;
+};
+
+// Throws NewtonFailure (after writing the last converged state) when an increment cannot be
+// converged within its cuts.
+ImplicitRunSummary runImplicit(const model::Model& model, const std::string& outputDirectory, std::ostream& log);
+
+}  // namespace perishell::solvers

@@ -1,0 +1,50 @@
+#pragma once
+// The Newton solver of an implicit deck's model: shell elements (CCM-only model) or PD bonds
+// (100 % PD), loads and supports on the device, the deck's Newton settings.
+#include <perishell/model/model.hpp>
+#include <perishell/pd/make_body.hpp>
+#include <perishell/solvers/implicit/static_newton.hpp>
+#include <perishell/solvers/model_actions.hpp>
+
+#include <vector>
+
+namespace perishell::solvers {
+
+// Throws std::invalid_argument naming the deck key for what the implicit solver cannot run:
+// mixed PD-CCM models (they need the coupling of model.md §4), follower pressure.
+void requireImplicitModel(const model::Model& model);
+
+template <class ExecutionSpaceT>
+StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& space, const model::Model& model) {
+  requireImplicitModel(model);
+  using Memory = typename ExecutionSpaceT::memory_space;
+  const auto& deck = model.deck;
+  const auto& material = deck.material;
+  const auto& settings = deck.solver.implicitSettings;
+  std::optional<shell::ShellBody<Memory>> shellBody;
+  std::optional<pd::PdBody<Memory>> pdBody;
+  if (model.numPdElements == 0) {
+    std::vector<LocalIndex> elements(model.shell.mesh.numElements());
+    for (LocalIndex e = 0; e < model.shell.mesh.numElements(); ++e) elements[e] = e;
+    shell::ShellSection section;
+    section.youngModulus = material.youngModulus;
+    section.poissonRatio = material.poissonRatio;
+    section.thickness = material.thickness;
+    shellBody = shell::makeShellBody(space, model.shell.mesh, elements, section);
+  } else {
+    pdBody = pd::makePdBody(space, model.shell.mesh, model.pdNodes,
+                            {material.youngModulus, material.poissonRatio, material.thickness, material.fractureEnergy},
+                            model.horizon(), model.gridSpacing(), model.preCrackSegments());
+  }
+  NewtonOptions options;
+  options.maxIterations = settings.maxIterations;
+  options.tolerance = settings.tolerance;
+  options.maxCuts = settings.maxCuts;
+  options.preconditioner = settings.preconditioner == deck::Preconditioner::Jacobi
+                               ? belos::CgOptions::Preconditioner::Jacobi
+                               : belos::CgOptions::Preconditioner::BlockJacobi;
+  return StaticNewtonSolver<ExecutionSpaceT>(space, model.shell.mesh.numNodes(), std::move(shellBody),
+                                             std::move(pdBody), makeExternalActions<Memory>(model), options);
+}
+
+}  // namespace perishell::solvers

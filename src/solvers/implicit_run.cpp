@@ -1,0 +1,204 @@
+#include <perishell/io/csv_history.hpp>
+#include <perishell/io/progress.hpp>
+#include <perishell/io/xdmf_writer.hpp>
+#include <perishell/solvers/implicit/implicit_run.hpp>
+#include <perishell/solvers/implicit/static_solver_from_model.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <ostream>
+#include <sstream>
+
+namespace perishell::solvers {
+
+void requireImplicitModel(const model::Model& model) {
+  const auto& deck = model.deck;
+  const LocalIndex numElements = model.shell.mesh.numElements();
+  if (model.numPdElements != 0 && model.numPdElements != numElements)
+    throw std::invalid_argument(deck.sourceName + ": zones: the implicit solver runs CCM-only or 100 % PD models; this one has " +
+                                std::to_string(model.numPdElements) + " PD of " + std::to_string(numElements) +
+                                " elements, and mixed PD-CCM models arrive with the coupling (model.md §4)");
+  for (const auto& load : deck.loads)
+    if (load.follower)
+      throw std::invalid_argument(deck.sourceName + ": loads." + load.name +
+                                  ".follower: the implicit solver applies pressure in the reference direction only; "
+                                  "set follower: false");
+}
+
+namespace {
+
+using Solver = StaticNewtonSolver<ExecutionSpace>;
+using HostVector3 = Kokkos::View<double* [3], Kokkos::LayoutRight, Kokkos::HostSpace>;
+
+std::string formatNumber(double value, int precision = 4) {
+  std::ostringstream text;
+  text.precision(precision);
+  text << value;
+  return text.str();
+}
+
+class ImplicitOutput {
+ public:
+  ImplicitOutput(const model::Model& model, const std::string& directory, const Solver& solver)
+      : model_(model), solver_(solver), writer_((std::filesystem::create_directories(directory), directory), "results",
+                                                model.shell.mesh) {
+    std::vector<std::string> columns = {"increment", "load-factor", "newton-iterations", "linear-iterations", "cuts",
+                                        "relative-residual", "max-displacement"};
+    for (const auto quantity : model.deck.output.history) {
+      if (quantity == deck::HistoryQuantity::Reactions)
+        for (const auto& support : model.deck.supports)
+          for (const char* axis : {"x", "y", "z"}) columns.push_back("reaction-" + support.name + "-" + axis);
+      if (quantity == deck::HistoryQuantity::LoadPoints)
+        for (const auto& load : model.deck.loads)
+          if (load.type == deck::LoadType::PointForce)
+            for (const char* axis : {"ux", "uy", "uz"}) columns.push_back(load.name + "-" + axis);
+    }
+    history_.emplace(directory + "/history.csv", columns);
+  }
+
+  std::string xdmfPath() const { return writer_.xdmfPath(); }
+  std::string historyPath() const { return history_->path(); }
+
+  void writeFields() {
+    const LocalIndex numNodes = model_.shell.mesh.numNodes();
+    std::vector<io::NodalField> fields;
+    for (const auto field : model_.deck.output.fields) {
+      switch (field) {
+        case deck::OutputField::Displacement: fields.push_back({"displacement", 3, displacements()}); break;
+        case deck::OutputField::Rotation: {
+          const auto quaternions = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().rotations);
+          HostVector3 rotationVectors("rotation", numNodes);
+          for (LocalIndex node = 0; node < numNodes; ++node) {
+            const double q[4] = {quaternions(node, 0), quaternions(node, 1), quaternions(node, 2), quaternions(node, 3)};
+            double R[3][3], theta[3];
+            rotation::toMatrix(q, R);
+            rotation::logarithm(R, theta);
+            for (int d = 0; d < 3; ++d) rotationVectors(node, d) = theta[d];
+          }
+          fields.push_back({"rotation", 3, rotationVectors});
+          break;
+        }
+        case deck::OutputField::Zone: {
+          Kokkos::View<int*, Kokkos::HostSpace> zone("zone", numNodes);
+          for (std::size_t k = 0; k < model_.pdNodes.extent(0); ++k) zone(model_.pdNodes(k)) = 1;
+          fields.push_back(io::makeScalarField("zone", zone));
+          break;
+        }
+        case deck::OutputField::Damage:  // no bond breaks in a static run
+          fields.push_back(io::makeScalarField("damage", Kokkos::View<double*, Kokkos::HostSpace>("damage", numNodes)));
+          break;
+        case deck::OutputField::Velocity: break;  // rejected for implicit decks by the deck reader
+      }
+    }
+    writer_.writeStep(solver_.loadFactor(), fields);
+    history_->flush();
+  }
+
+  // Returns the largest nodal displacement magnitude.
+  double appendHistory(int increment, const IncrementReport& report) {
+    const auto u = displacements();
+    double maxDisplacement = 0.0;
+    for (LocalIndex node = 0; node < model_.shell.mesh.numNodes(); ++node)
+      maxDisplacement = std::max(maxDisplacement, std::hypot(u(node, 0), u(node, 1), u(node, 2)));
+    std::vector<double> row = {double(increment), report.loadFactor, double(report.newtonIterations),
+                               double(report.linearIterations), double(report.cuts), report.relativeResidual,
+                               maxDisplacement};
+    const auto& deck = model_.deck;
+    for (const auto quantity : deck.output.history) {
+      if (quantity == deck::HistoryQuantity::Reactions) {
+        // The support carries what the out-of-balance force lacks: R = F_int - P = -r.
+        const auto r = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.outOfBalance());
+        for (const auto& support : deck.supports) {
+          double sum[3] = {0.0, 0.0, 0.0};
+          for (const LocalIndex node : model_.shell.sets.nodesOfNodeOrEdgeSet(support.set))
+            for (int d = 0; d < 3; ++d) sum[d] -= r(node, d);
+          row.insert(row.end(), sum, sum + 3);
+        }
+      }
+      if (quantity == deck::HistoryQuantity::LoadPoints)
+        for (const auto& load : deck.loads) {
+          if (load.type != deck::LoadType::PointForce) continue;
+          const auto& nodes = model_.shell.sets.nodeSet(load.set);
+          double mean[3] = {0.0, 0.0, 0.0};
+          for (const LocalIndex node : nodes)
+            for (int d = 0; d < 3; ++d) mean[d] += u(node, d) / nodes.size();
+          row.insert(row.end(), mean, mean + 3);
+        }
+    }
+    history_->append(row);
+    return maxDisplacement;
+  }
+
+ private:
+  HostVector3 displacements() const {
+    return Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().displacements);
+  }
+
+  const model::Model& model_;
+  const Solver& solver_;
+  io::XdmfTimeSeriesWriter writer_;
+  std::optional<io::CsvHistory> history_;
+};
+
+}  // namespace
+
+ImplicitRunSummary runImplicit(const model::Model& model, const std::string& outputDirectory, std::ostream& log) {
+  const auto& deck = model.deck;
+  const int increments = deck.solver.implicitSettings.increments;
+  const ExecutionSpace space;
+  const auto setupStart = std::chrono::steady_clock::now();
+  auto solver = makeStaticSolver(space, model);
+  const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - setupStart).count();
+  log << "implicit: " << solver.numElements() << " shell elements, " << solver.numBonds() << " bonds on "
+      << ExecutionSpace::name() << "; " << model.freeDofCount() << " free DOF, " << solver.numMatrixEntries()
+      << " tangent entries; " << increments << " increments; setup " << formatNumber(setupSeconds) << " s\n";
+
+  const std::string directory = outputDirectory.empty() ? deck.output.directory : outputDirectory;
+  ImplicitOutput output(model, directory, solver);
+  output.writeFields();
+  io::ProgressReporter progress(increments, log);
+  ImplicitRunSummary summary;
+  const auto runStart = std::chrono::steady_clock::now();
+  for (int increment = 1; increment <= increments; ++increment) {
+    IncrementReport report;
+    try {
+      report = solver.advanceTo(double(increment) / increments);
+    } catch (const NewtonFailure& failure) {
+      output.writeFields();
+      throw NewtonFailure("increment " + std::to_string(increment) + " of " + std::to_string(increments) + ": " +
+                          failure.what() + "; the last converged state (load factor " +
+                          formatNumber(solver.loadFactor()) + ") is in " + output.xdmfPath());
+    }
+    summary.cuts += report.cuts;
+    summary.newtonIterations += report.newtonIterations;
+    summary.linearIterations += report.linearIterations;
+    const bool last = increment == increments;
+    if (last || increment % deck.output.historyEvery == 0)
+      summary.maxDisplacement = output.appendHistory(increment, report);
+    if (last || (deck.output.every > 0 && increment % deck.output.every == 0)) output.writeFields();
+    progress.update(increment, solver.loadFactor());
+  }
+  summary.increments = increments;
+  summary.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - runStart).count();
+  summary.xdmfPath = output.xdmfPath();
+  summary.historyPath = output.historyPath();
+  io::SummaryTable("implicit run summary")
+      .add("increments", std::to_string(increments) + " (" + std::to_string(summary.cuts) + " cuts)")
+      .add("Newton iterations", std::to_string(summary.newtonIterations))
+      .add("linear iterations", std::to_string(summary.linearIterations) + " (" +
+                                    (deck.solver.implicitSettings.preconditioner == deck::Preconditioner::Jacobi
+                                         ? "Jacobi"
+                                         : "6x6 block-Jacobi") +
+                                    " PCG)")
+      .add("max displacement", formatNumber(summary.maxDisplacement, 6) + " m")
+      .add("wall time", io::formatDuration(summary.wallSeconds))
+      .add("setup", formatNumber(setupSeconds) + " s")
+      .add("fields", summary.xdmfPath)
+      .add("history", summary.historyPath)
+      .print(log);
+  return summary;
+}
+
+}  // namespace perishell::solvers

@@ -1,0 +1,217 @@
+// Geometrically nonlinear statics (solvers/implicit/static_newton.hpp) against the reference
+// solutions of model.md §8: Sze's cantilever under end shear (3.1) and end moment (3.2), the
+// tip-loaded elastica, and Timoshenko's simply supported plate; plus the failure paths (an
+// increment too large for Newton is cut and recovers, a mechanism is reported).
+#include <perishell/io/deck.hpp>
+#include <perishell/solvers/implicit/static_solver_from_model.hpp>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace perishell_test_static_newton {
+
+using Solver = perishell::solvers::StaticNewtonSolver<TEST_EXECSPACE>;
+
+perishell::model::Model stripModel(const std::string& zone, double spacing, double length, const std::string& load,
+                                   const std::string& solver = "increments: 20, max-iterations: 60, tolerance: 1.0e-9") {
+  const std::string text = R"(perishell:
+  version: 1
+  mesh: {generator: plate, length-x: )" + std::to_string(length) + R"(, length-y: 1.0, spacing: )" +
+                           std::to_string(spacing) + R"(}
+  material: {young-modulus: 1.2e6, poisson-ratio: 0.0, density: 1.0, thickness: 0.1}
+  zones: {default: )" + zone + R"(}
+  supports: {clamp: {set: left, dofs: [ux, uy, uz, rx, ry, rz]}}
+  loads: {tip: )" + load + R"(}
+  solver: {type: implicit, )" + solver + R"(}
+)";
+  return perishell::model::buildModel(perishell::parseDeck(text, "strip.yaml"));
+}
+
+// Mean displacement of the nodes of a set.
+std::array<double, 3> meanDisplacement(const Solver& solver, const perishell::model::Model& model,
+                                       const std::string& set) {
+  const auto u = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.kinematics().displacements);
+  const auto& nodes = model.shell.sets.nodeSet(set);
+  std::array<double, 3> mean{0.0, 0.0, 0.0};
+  for (const auto node : nodes)
+    for (int d = 0; d < 3; ++d) mean[d] += u(node, d) / nodes.size();
+  return mean;
+}
+
+struct Level {
+  double loadFactor, minusU, w;  // reference tip displacements
+};
+
+// Advances through the levels; returns the largest error relative to the tip's deflection scale.
+double worstTipError(Solver& solver, const perishell::model::Model& model, const std::vector<Level>& levels,
+                     double scale, const char* label) {
+  double worst = 0.0;
+  for (const auto& level : levels) {
+    solver.advanceTo(level.loadFactor);
+    const auto tip = meanDisplacement(solver, model, "right");
+    const double error = std::max(std::abs(-tip[0] - level.minusU), std::abs(tip[2] - level.w)) / scale;
+    std::printf("%s P/Pmax %.2f: -u %.4f (ref %.3f), w %.4f (ref %.3f), error %.2f %%\n", label, level.loadFactor,
+                -tip[0], level.minusU, tip[2], level.w, 100.0 * error);
+    worst = std::max(worst, error);
+  }
+  return worst;
+}
+
+// model.md §8, Sze 3.1 and 3.2 columns.
+const std::vector<Level> sze31 = {{0.05, 0.026, 0.663}, {0.1, 0.103, 1.309}, {0.2, 0.381, 2.493}, {0.3, 0.763, 3.488},
+                                  {0.4, 1.184, 4.292},  {0.5, 1.604, 4.933}, {0.6, 2.002, 5.444}, {0.7, 2.370, 5.855},
+                                  {0.8, 2.705, 6.190},  {0.9, 3.010, 6.467}, {1.0, 3.286, 6.698}};
+const std::vector<Level> sze32 = {{0.05, 0.196, 1.870}, {0.1, 0.774, 3.648},  {0.2, 2.918, 6.598},
+                                  {0.3, 5.945, 8.333},  {0.4, 9.194, 8.637},  {0.5, 12.000, 7.639},
+                                  {0.6, 13.871, 5.758}, {0.7, 14.595, 3.571}, {0.8, 14.270, 1.650},
+                                  {0.9, 13.247, 0.405}, {1.0, 12.000, 0.0}};
+
+// End shear P_max = 4 as an edge traction over the 1 x 0.1 end section.
+const std::string endShear = "{type: edge-traction, set: right, vector: [0.0, 0.0, 40.0]}";
+
+}  // namespace perishell_test_static_newton
+
+TEST(TEST_CATEGORY, static_newton_sze_cantilever_under_end_shear_ccm) {
+  using namespace perishell_test_static_newton;
+  const auto model = stripModel("ccm", 0.5, 10.0, endShear);
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  // 2 % of the tip deflection at each level, measured against the final deflection scale.
+  EXPECT_LT(worstTipError(solver, model, sze31, 6.698, "Sze 3.1 CCM"), 0.02);
+}
+
+TEST(TEST_CATEGORY, static_newton_sze_cantilever_rolled_into_a_circle_ccm) {
+  using namespace perishell_test_static_newton;
+  // M_max = 2 pi E I / L about -y, shared by the 3 end nodes.
+  const double momentPerNode = 50.0 * 3.14159265358979323846 / 3.0 / 3.0;
+  const auto model = stripModel("ccm", 0.5, 12.0,
+                                "{type: point-force, set: right, vector: [0.0, 0.0, 0.0], moment: [0.0, " +
+                                    std::to_string(-momentPerNode) + ", 0.0]}",
+                                "increments: 20, max-iterations: 100, tolerance: 1.0e-6");
+  // The symmetric tangent lacks the -1/2 skew(M) term of the fixed-axis end moment, so
+  // Newton converges linearly here and stalls past P/Pmax = 0.4 (the half circle); the
+  // element's own test closes the full circle with the exact, non-symmetric tangent.
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  const std::vector<Level> upToHalfCircle(sze32.begin(), sze32.begin() + 5);
+  EXPECT_LT(worstTipError(solver, model, upToHalfCircle, 12.0, "Sze 3.2 CCM"), 0.02);
+}
+
+namespace perishell_test_static_newton {
+
+// Tip-loaded elastica (model.md §8), alpha = P L^2 / (E I) up to 12 (P = 12 here).
+struct ElasticaLevel {
+  double alpha, uOverL, wOverL;
+};
+const std::vector<ElasticaLevel> elastica = {{1, .05643, .30172}, {2, .16064, .49346}, {4, .32894, .66996},
+                                             {6, .43459, .74457}, {8, .50483, .78498}, {12, .59285, .82859}};
+
+// Simply supported square plate (edges: w = 0; in-plane rigid motion removed at two corners)
+// under a small uniform pressure: w_max = 0.00406 q a^4 / D (model.md §8).
+perishell::model::Model simplySupportedPlate(const std::string& zone) {
+  const std::string text = R"(perishell:
+  version: 1
+  mesh:
+    generator: plate
+    length-x: 1.0
+    length-y: 1.0
+    spacing: 0.05
+    node-sets:
+      origin: {box: {min: [-0.001, -0.001, -0.001], max: [0.001, 0.001, 0.001]}}
+      corner-x: {box: {min: [0.999, -0.001, -0.001], max: [1.001, 0.001, 0.001]}}
+  material: {young-modulus: 70.0e9, poisson-ratio: 0.3, density: 2700.0, thickness: 0.01}
+  zones: {default: )" + zone + R"(}
+  supports:
+    bottom: {set: bottom, dofs: [uz]}
+    right: {set: right, dofs: [uz]}
+    top: {set: top, dofs: [uz]}
+    left: {set: left, dofs: [uz]}
+    pin: {set: origin, dofs: [ux, uy]}
+    roller: {set: corner-x, dofs: [uy]}
+  loads: {pressure: {type: pressure, value: 1000.0}}
+  solver: {type: implicit, increments: 1, tolerance: 1.0e-6}
+)";
+  return perishell::model::buildModel(perishell::parseDeck(text, "plate.yaml"));
+}
+
+double centreDeflectionError(const perishell::model::Model& model, const char* label) {
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  const auto report = solver.advanceTo(1.0);
+  const auto u = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.kinematics().displacements);
+  const auto& x = model.shell.mesh.coordinates;
+  double centre = 0.0;
+  for (perishell::LocalIndex node = 0; node < model.shell.mesh.numNodes(); ++node)
+    if (std::abs(x(node, 0) - 0.5) < 1e-9 && std::abs(x(node, 1) - 0.5) < 1e-9) centre = u(node, 2);
+  const double D = 70.0e9 * 1e-6 / (12.0 * (1.0 - 0.09));
+  const double reference = 0.00406 * 1000.0 / D;
+  std::printf("%s: w_max %.6e m, Kirchhoff %.6e m, error %.2f %% (%d Newton, %lld linear iterations)\n", label,
+              centre, reference, 100.0 * (centre / reference - 1.0), report.newtonIterations,
+              report.linearIterations);
+  return std::abs(centre / reference - 1.0);
+}
+
+}  // namespace perishell_test_static_newton
+
+TEST(TEST_CATEGORY, static_newton_elastica_of_a_tip_loaded_cantilever_ccm) {
+  using namespace perishell_test_static_newton;
+  const auto model = stripModel("ccm", 0.25, 10.0, "{type: edge-traction, set: right, vector: [0.0, 0.0, 120.0]}");
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  double worst = 0.0;
+  for (const auto& level : elastica) {
+    solver.advanceTo(level.alpha / 12.0);
+    const auto tip = meanDisplacement(solver, model, "right");
+    const double error = std::hypot(-tip[0] / 10.0 - level.uOverL, tip[2] / 10.0 - level.wOverL) /
+                         std::hypot(level.uOverL, level.wOverL);
+    std::printf("elastica alpha %4.1f: u/L %.5f (exact %.5f), w/L %.5f (exact %.5f), error %.3f %%\n", level.alpha,
+                -tip[0] / 10.0, level.uOverL, tip[2] / 10.0, level.wOverL, 100.0 * error);
+    worst = std::max(worst, error);
+  }
+  EXPECT_LT(worst, 0.01);
+}
+
+TEST(TEST_CATEGORY, static_newton_simply_supported_plate_under_pressure_ccm) {
+  using namespace perishell_test_static_newton;
+  EXPECT_LT(centreDeflectionError(simplySupportedPlate("ccm"), "SS plate CCM"), 0.02);
+}
+
+TEST(TEST_CATEGORY, static_newton_simply_supported_plate_under_pressure_pd) {
+  using namespace perishell_test_static_newton;
+  EXPECT_LT(centreDeflectionError(simplySupportedPlate("pd"), "SS plate 100 % PD"), 0.02);
+}
+
+TEST(TEST_CATEGORY, static_newton_cuts_an_increment_too_large_and_recovers) {
+  using namespace perishell_test_static_newton;
+  // The whole of Sze 3.1 in one increment, with too few iterations allowed to get there.
+  const auto model =
+      stripModel("ccm", 0.5, 10.0, endShear, "increments: 1, max-iterations: 25, max-cuts: 8, tolerance: 1.0e-9");
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  const auto report = solver.advanceTo(1.0);
+  const auto tip = meanDisplacement(solver, model, "right");
+  std::printf("one increment to P_max: %d attempts, %d cuts, tip -u %.4f w %.4f\n", report.attempts, report.cuts,
+              -tip[0], tip[2]);
+  EXPECT_GE(report.cuts, 1);
+  EXPECT_NEAR(tip[2], 6.698, 0.02 * 6.698);
+}
+
+TEST(TEST_CATEGORY, static_newton_reports_a_mechanism) {
+  using namespace perishell_test_static_newton;
+  // Only w is held at the clamp: the strip is free to slide and spin in its plane.
+  const std::string text = R"(perishell:
+  version: 1
+  mesh: {generator: plate, length-x: 4.0, length-y: 1.0, spacing: 0.5}
+  material: {young-modulus: 1.2e6, poisson-ratio: 0.0, density: 1.0, thickness: 0.1}
+  zones: {default: ccm}
+  supports: {clamp: {set: left, dofs: [uz]}}
+  loads: {pull: {type: edge-traction, set: right, vector: [40.0, 0.0, 0.0]}}
+  solver: {type: implicit, increments: 1, max-cuts: 2}
+)";
+  const auto model = perishell::model::buildModel(perishell::parseDeck(text, "mechanism.yaml"));
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  try {
+    solver.advanceTo(1.0);
+    FAIL() << "a strip free to slide converged";
+  } catch (const perishell::solvers::NewtonFailure& failure) {
+    const std::string message = failure.what();
+    EXPECT_NE(message.find("singular"), std::string::npos) << message;
+    EXPECT_NE(message.find("supports"), std::string::npos) << message;
+  }
+}
