@@ -1,3 +1,4 @@
+#include <perishell/core/rotation.hpp>
 #include <perishell/io/atomic_file.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 
@@ -154,6 +155,20 @@ NodalField makeScalarField(std::string name, const Kokkos::View<const double*, K
 
 NodalField makeScalarField(std::string name, const Kokkos::View<const int*, Kokkos::HostSpace>& values) {
   return scalarFieldFrom(std::move(name), values);
+}
+
+NodalField makeRotationVectorField(
+    std::string name, const Kokkos::View<const double* [4], Kokkos::LayoutRight, Kokkos::HostSpace>& quaternions) {
+  const auto numNodes = quaternions.extent(0);
+  Kokkos::View<double**, Kokkos::LayoutRight, Kokkos::HostSpace> rotationVectors(name, numNodes, 3);
+  for (std::size_t node = 0; node < numNodes; ++node) {
+    const double q[4] = {quaternions(node, 0), quaternions(node, 1), quaternions(node, 2), quaternions(node, 3)};
+    double R[3][3], theta[3];
+    rotation::toMatrix(q, R);
+    rotation::logarithm(R, theta);
+    for (int d = 0; d < 3; ++d) rotationVectors(node, d) = theta[d];
+  }
+  return {std::move(name), 3, rotationVectors};
 }
 
 XdmfTimeSeriesWriter::XdmfTimeSeriesWriter(std::string directory, std::string baseName,

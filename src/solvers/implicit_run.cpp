@@ -67,19 +67,10 @@ class ImplicitOutput {
     for (const auto field : model_.deck.output.fields) {
       switch (field) {
         case deck::OutputField::Displacement: fields.push_back({"displacement", 3, displacements()}); break;
-        case deck::OutputField::Rotation: {
-          const auto quaternions = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().rotations);
-          HostVector3 rotationVectors("rotation", numNodes);
-          for (LocalIndex node = 0; node < numNodes; ++node) {
-            const double q[4] = {quaternions(node, 0), quaternions(node, 1), quaternions(node, 2), quaternions(node, 3)};
-            double R[3][3], theta[3];
-            rotation::toMatrix(q, R);
-            rotation::logarithm(R, theta);
-            for (int d = 0; d < 3; ++d) rotationVectors(node, d) = theta[d];
-          }
-          fields.push_back({"rotation", 3, rotationVectors});
+        case deck::OutputField::Rotation:
+          fields.push_back(io::makeRotationVectorField(
+              "rotation", Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().rotations)));
           break;
-        }
         case deck::OutputField::Zone: {
           Kokkos::View<int*, Kokkos::HostSpace> zone("zone", numNodes);
           for (std::size_t k = 0; k < model_.pdNodes.extent(0); ++k) zone(model_.pdNodes(k)) = 1;

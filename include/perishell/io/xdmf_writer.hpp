@@ -36,6 +36,10 @@ struct NodalField {
 // (flags, counts) are written as float64, which holds every int exactly.
 NodalField makeScalarField(std::string name, const Kokkos::View<const double*, Kokkos::HostSpace>& values);
 NodalField makeScalarField(std::string name, const Kokkos::View<const int*, Kokkos::HostSpace>& values);
+// The rotation vector (axis times angle, the logarithm of model.md §5) of each node's unit
+// quaternion (w, x, y, z), a Vector field.
+NodalField makeRotationVectorField(
+    std::string name, const Kokkos::View<const double* [4], Kokkos::LayoutRight, Kokkos::HostSpace>& quaternions);
 
 class XdmfTimeSeriesWriter {
  public:

@@ -4,7 +4,7 @@
 // values through the pattern's precomputed slots. One thread per element; the element
 // itself is shell/mitc4_shell.hpp.
 #include <perishell/mesh/quad_mesh.hpp>
-#include <perishell/pd/bond_tangent.hpp>
+#include <perishell/pd/pd_body.hpp>
 #include <perishell/shell/mitc4_shell.hpp>
 
 #include <sstream>
@@ -99,12 +99,12 @@ void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpa
       });
 }
 
-// Adds every element's tangent (Symmetric for CG; Exact, the derivative of the force under
-// R <- exp(dphi) R, for GMRES) into the CRS values; the pattern's element e is body element e.
+// Adds every element's symmetric tangent K_T (the one CG solves with) into the CRS values;
+// the pattern's element e is body element e.
 template <class ExecutionSpaceT, class MemorySpaceT, class PatternT>
 void assembleShellTangent(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
                           const pd::PdKinematics<MemorySpaceT>& state, const PatternT& pattern,
-                          const VectorView<MemorySpaceT>& values, pd::TangentForm form = pd::TangentForm::Symmetric) {
+                          const VectorView<MemorySpaceT>& values) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   Kokkos::parallel_for(
       "perishell::shell::assembleShellTangent", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numElements()),
@@ -114,7 +114,6 @@ void assembleShellTangent(const ExecutionSpaceT& space, const ShellBody<MemorySp
         for (int r = 0; r < 24; ++r)
           for (int s = 0; s < 24; ++s) localStiffness[r][s] = body.localStiffness(e, r, s);
         shellTangent(reference, current, rotations, localStiffness, force, tangent);
-        if (form == pd::TangentForm::Exact) addRotationAsymmetry(force, tangent);
         pattern.atomicAddElementMatrix(e, tangent, values);
       });
 }

@@ -39,9 +39,6 @@ struct CgOptions {
   bool fallbackOnBreakdown = true;
   // Krylov vectors GMRES builds before it restarts; it stores that many vectors of length n.
   int gmresRestart = 200;
-  // GMRES from the start, for matrices known to be non-symmetric (the exact Newton tangent
-  // of a model loaded by moments).
-  bool gmresOnly = false;
 };
 
 struct CgResult {
@@ -160,7 +157,7 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
                                 std::to_string(options.tolerance) + " and " +
                                 std::to_string(options.maxIterations));
   }
-  if ((options.fallbackOnBreakdown || options.gmresOnly) && options.gmresRestart < 1) {
+  if (options.fallbackOnBreakdown && options.gmresRestart < 1) {
     throw std::invalid_argument("perishell::belos::solveCg: gmresRestart must be at least 1, got " +
                                 std::to_string(options.gmresRestart));
   }
@@ -191,7 +188,7 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
   params->set("Maximum Iterations", options.maxIterations);
 
   std::string breakdown;
-  if (!options.gmresOnly) try {
+  try {
     Belos::PseudoBlockCGSolMgr<double, MV, OP> cg(detail::makeProblem(op, X, B, preconditioner), params);
     const CgResult result = detail::runSolver(cg, "CG", "");
     // x2d aliases x, and CGIter writes the iterate straight into X; the fence makes the
@@ -206,7 +203,7 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
     if (!options.fallbackOnBreakdown) throw std::runtime_error("perishell::belos::solveCg: " + breakdown);
   }
 
-  if (initialGuess.extent(0) == n) Kokkos::deep_copy(x, initialGuess);
+  Kokkos::deep_copy(x, initialGuess);
   const auto gmresParams = Teuchos::parameterList("perishell GMRES");
   gmresParams->set("Convergence Tolerance", options.tolerance);
   gmresParams->set("Maximum Iterations", options.maxIterations);

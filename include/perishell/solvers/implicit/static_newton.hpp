@@ -43,12 +43,6 @@ struct NewtonOptions {
   int maxCuts = 8;  // bisections in a row before giving up
   belos::CgOptions::Preconditioner preconditioner = belos::CgOptions::Preconditioner::BlockJacobi;
   int maxLinearIterations = 20000;
-  // Symmetric: K_L + K_S, solved by PCG. Exact: the derivative of the internal force under
-  // R <- exp(dphi) R, non-symmetric where nodes carry moments; solved by GMRES. Fixed-axis
-  // applied moments are not conservative under finite rotations, so models loaded by
-  // moments need the exact form for Newton to converge (and the symmetric part may be
-  // indefinite there).
-  pd::TangentForm tangentForm = pd::TangentForm::Symmetric;
 };
 
 // Newton gave up on an increment after every allowed cut; the state is the last converged one.
@@ -63,7 +57,6 @@ struct IncrementReport {
   int attempts = 0, cuts = 0, newtonIterations = 0;
   long long linearIterations = 0;
   double relativeResidual = 0.0;
-  bool usedFallbackSolver = false;
 };
 
 template <class ExecutionSpaceT>
@@ -90,8 +83,7 @@ class StaticNewtonSolver {
         outOfBalance_("perishell::newton::outOfBalance", numNodes),
         correction_("perishell::newton::correction", numNodes),
         isConstrained_("perishell::newton::isConstrained", 6 * std::size_t(numNodes)),
-        zeros_("perishell::newton::zeros", 6 * std::size_t(numNodes)),
-        rhs_("perishell::newton::rhs", 6 * std::size_t(numNodes)) {
+        zeros_("perishell::newton::zeros", 6 * std::size_t(numNodes)) {
     if (pd_ && pd_->numNodes() != numNodes)
       throw std::invalid_argument("StaticNewtonSolver: the PD body must cover every mesh node (got " +
                                   std::to_string(pd_->numNodes()) + " of " + std::to_string(numNodes) + ")");
@@ -175,26 +167,22 @@ class StaticNewtonSolver {
       belos::CgOptions linear;
       linear.preconditioner = options_.preconditioner;
       linear.maxIterations = options_.maxLinearIterations;
-      linear.gmresOnly = options_.tangentForm == pd::TangentForm::Exact;
       // A CG breakdown (an indefinite tangent away from equilibrium) cuts the increment.
       linear.fallbackOnBreakdown = false;
-      linear.gmresRestart = static_cast<int>(std::min<std::size_t>(rhs_.extent(0), 300));
-      // GMRES (exact tangent, or after a CG breakdown) may stall on a badly conditioned shell;
-      // an inexact step whose residual fell below 1e-2 still moves Newton on.
-      if (linear.gmresOnly) linear.maxIterations = std::min(linear.maxIterations, 4 * linear.gmresRestart);
       // Solve only as accurately as the Newton target needs (10 % of it), within [1e-10, 1e-3].
       linear.tolerance = std::clamp(0.1 * options_.tolerance * reference / norms.free, 1e-10, 1e-3);
-      Kokkos::deep_copy(space_, rhs_, flatOutOfBalance());
-      assembly::eliminateDirichlet(space_, pattern_.rowMap, pattern_.columns, values_, rhs_, isConstrained_, zerosConst());
-      const Matrix K("perishell::newton::tangent", static_cast<LocalIndex>(rhs_.extent(0)),
-                     static_cast<LocalIndex>(rhs_.extent(0)), static_cast<RowOffset>(values_.extent(0)), values_,
+      // r is the right-hand side in place: the next iteration evaluates it afresh.
+      const VectorView<Memory> rhs = flatOutOfBalance();
+      assembly::eliminateDirichlet(space_, pattern_.rowMap, pattern_.columns, values_, rhs, isConstrained_, zerosConst());
+      const auto numRows = static_cast<LocalIndex>(rhs.extent(0));
+      const Matrix K("perishell::newton::tangent", numRows, numRows, static_cast<RowOffset>(values_.extent(0)), values_,
                      pattern_.rowMap, pattern_.columns);
       const VectorView<Memory> solution = flatCorrection();
       Kokkos::deep_copy(space_, solution, 0.0);
       belos::CgResult result;
       std::string linearFailure;
       try {
-        result = belos::solveCg<ExecutionSpaceT>(K, rhs_, solution, linear);
+        result = belos::solveCg<ExecutionSpaceT>(K, rhs, solution, linear);
         if (!result.converged && !(result.achievedTolerance < 1e-2))
           linearFailure = "the linear solve did not converge (" + std::to_string(result.iterations) + " " +
                           result.method + " iterations, relative residual " +
@@ -209,7 +197,6 @@ class StaticNewtonSolver {
       if (!linearFailure.empty()) return linearFailure;
       ++report.newtonIterations;
       report.linearIterations += result.iterations;
-      report.usedFallbackSolver = report.usedFallbackSolver || result.method != "CG";
       applyCorrection();
     }
   }
@@ -261,8 +248,8 @@ class StaticNewtonSolver {
 
   void assembleTangent() {
     Kokkos::deep_copy(space_, values_, 0.0);
-    if (shell_) shell::assembleShellTangent(space_, *shell_, state_, pattern_, values_, options_.tangentForm);
-    if (pd_) pd::assembleBondTangent(space_, *pd_, state_, intact_, pattern_, values_, options_.tangentForm);
+    if (shell_) shell::assembleShellTangent(space_, *shell_, state_, pattern_, values_);
+    if (pd_) pd::assembleBondTangent(space_, *pd_, state_, intact_, pattern_, values_);
   }
 
   // Prescribed DOF take value x factor(s) (docs/deck.md: a support without a curve ramps
@@ -352,7 +339,7 @@ class StaticNewtonSolver {
   pd::PdKinematics<Memory> state_, saved_;
   pd::NodalVectorView<Memory> outOfBalance_, correction_;
   Kokkos::View<bool*, Memory> isConstrained_;
-  VectorView<Memory> zeros_, rhs_;
+  VectorView<Memory> zeros_;
   pd::BondFlagView<Memory> intact_, intactScratch_;
   VectorView<Memory> fractureScratch_;
   assembly::NodalBlockPattern<Memory> pattern_;
