@@ -24,24 +24,19 @@ struct BondForceOutputs {
   BondFlagView<MemorySpaceT> intactNext;     // written for every bond
 };
 
-// Symmetric in i and j, so both ends of a bond see the same moduli.
+// The micromoduli of half bond b: the body's times the bond's stiffness scales (pd_body.hpp).
 template <class MemorySpaceT>
-KOKKOS_INLINE_FUNCTION double bondLengthCorrection(const PdBody<MemorySpaceT>& body, LocalIndex i, LocalIndex j) {
-  return 0.5 * (body.correctionLengthWeighted(i) + body.correctionLengthWeighted(j));
+KOKKOS_INLINE_FUNCTION Micromoduli bondMicromoduli(const PdBody<MemorySpaceT>& body, RowOffset halfBond) {
+  return correctedMicromoduli(body.micromoduli, body.stiffnessScale(halfBond, 0), body.stiffnessScale(halfBond, 1));
 }
 
+// w_c of model.md §3 times the bond's stretch scale, the factor on c_ax: pure stretch then
+// still breaks a bond at exactly s_c of model.md §3 (both sides of 1/2 c_ax s^2 xi = w_c
+// carry the same factor), and a broken bond releases its scaled share of G_c.
 template <class MemorySpaceT>
-KOKKOS_INLINE_FUNCTION Micromoduli bondMicromoduli(const PdBody<MemorySpaceT>& body, LocalIndex i, LocalIndex j) {
-  return correctedMicromoduli(body.micromoduli, bondLengthCorrection(body, i, j),
-                              0.5 * (body.correctionInverseLengthWeighted(i) + body.correctionInverseLengthWeighted(j)));
-}
-
-// w_c of model.md §3 scaled like the stretch modulus, so that pure stretch still breaks a
-// bond at exactly s_c and a broken bond releases its corrected share of G_c.
-template <class MemorySpaceT>
-KOKKOS_INLINE_FUNCTION double criticalMicropotential(const PdBody<MemorySpaceT>& body, LocalIndex i, LocalIndex j,
+KOKKOS_INLINE_FUNCTION double criticalMicropotential(const PdBody<MemorySpaceT>& body, RowOffset halfBond,
                                                      double referenceLength) {
-  return body.criticalMicropotentialPerLength * referenceLength * bondLengthCorrection(body, i, j);
+  return body.criticalMicropotentialPerLength * referenceLength * body.stiffnessScale(halfBond, 0);
 }
 
 // V_i V_j beta: the bond's share of the double volume integral (model.md §1-2).
@@ -53,6 +48,7 @@ KOKKOS_INLINE_FUNCTION double bondVolumeWeight(const PdBody<MemorySpaceT>& body,
 
 namespace detail {
 
+// One end from the kinematics itself (used where no node-frame pass ran: the tangent).
 template <class MemorySpaceT>
 KOKKOS_INLINE_FUNCTION void loadBondEnd(const PdBody<MemorySpaceT>& body, const PdKinematics<MemorySpaceT>& state,
                                         LocalIndex node, MicrobeamEnd& end) {
@@ -66,7 +62,39 @@ KOKKOS_INLINE_FUNCTION void loadBondEnd(const PdBody<MemorySpaceT>& body, const 
   rotation::toMatrix(q, end.rotation);
 }
 
+// One end from the node frames of this evaluation (updateNodeFrames): the same numbers.
+template <class MemorySpaceT>
+KOKKOS_INLINE_FUNCTION void loadFramedBondEnd(const PdBody<MemorySpaceT>& body, const PdKinematics<MemorySpaceT>& state,
+                                              LocalIndex node, MicrobeamEnd& end) {
+  for (int k = 0; k < 3; ++k) {
+    end.referencePosition[k] = body.referencePositions(node, k);
+    end.position[k] = state.nodeFrames(node, k);
+    end.referenceNormal[k] = body.referenceNormals(node, k);
+  }
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k) end.rotation[r][k] = state.nodeFrames(node, 3 + 3 * r + k);
+}
+
 }  // namespace detail
+
+// Every node's current position and rotation matrix, once per evaluation, into
+// state.nodeFrames: a bond then reads them instead of rebuilding both ends (the quaternion
+// to matrix conversion and X + u were repeated for each of a node's ~28 bonds, twice in
+// node-gather).
+template <class ExecutionSpaceT, class MemorySpaceT>
+void updateNodeFrames(const ExecutionSpaceT& space, const PdBody<MemorySpaceT>& body,
+                      const PdKinematics<MemorySpaceT>& state) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  Kokkos::parallel_for(
+      "perishell::pd::updateNodeFrames", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numNodes()),
+      KOKKOS_LAMBDA(const LocalIndex node) {
+        MicrobeamEnd end;
+        detail::loadBondEnd(body, state, node, end);
+        for (int k = 0; k < 3; ++k) state.nodeFrames(node, k) = end.position[k];
+        for (int r = 0; r < 3; ++r)
+          for (int k = 0; k < 3; ++k) state.nodeFrames(node, 3 + 3 * r + k) = end.rotation[r][k];
+      });
+}
 
 template <class ExecutionSpaceT, class MemorySpaceT>
 void computeBondForces(const ExecutionSpaceT& space, deck::ForceKernel kernel, const PdBody<MemorySpaceT>& body,
@@ -74,6 +102,7 @@ void computeBondForces(const ExecutionSpaceT& space, deck::ForceKernel kernel, c
                        const BondForceOutputs<MemorySpaceT>& out) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   const bool withStrainEnergy = out.strainEnergy.extent(0) > 0;
+  updateNodeFrames(space, body, state);
   if (kernel == deck::ForceKernel::BondScatter) {
     Kokkos::parallel_for(
         "perishell::pd::computeBondForces::bondScatter",
@@ -84,13 +113,13 @@ void computeBondForces(const ExecutionSpaceT& space, deck::ForceKernel kernel, c
             return;
           }
           MicrobeamEnd ends[2];
-          detail::loadBondEnd(body, state, nodes[0], ends[0]);
-          detail::loadBondEnd(body, state, nodes[1], ends[1]);
+          detail::loadFramedBondEnd(body, state, nodes[0], ends[0]);
+          detail::loadFramedBondEnd(body, state, nodes[1], ends[1]);
           const double xi = body.bonds.referenceLength(b);
           MicrobeamResponse response;
-          evaluateMicrobeam(bondMicromoduli(body, nodes[0], nodes[1]), ends[0], ends[1], xi, response);
+          evaluateMicrobeam(bondMicromoduli(body, b), ends[0], ends[1], xi, response);
           const double weight = bondVolumeWeight(body, nodes[0], nodes[1], b);
-          const bool breaks = response.micropotential >= criticalMicropotential(body, nodes[0], nodes[1], xi);
+          const bool breaks = response.micropotential >= criticalMicropotential(body, b, xi);
           out.intactNext(b) = breaks ? 0 : 1;
           const double halfEnergy = 0.5 * weight * response.micropotential;
           for (int end = 0; end < 2; ++end) {
@@ -108,7 +137,7 @@ void computeBondForces(const ExecutionSpaceT& space, deck::ForceKernel kernel, c
       "perishell::pd::computeBondForces::nodeGather",
       Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numNodes()), KOKKOS_LAMBDA(const LocalIndex node) {
         MicrobeamEnd self, other;
-        detail::loadBondEnd(body, state, node, self);
+        detail::loadFramedBondEnd(body, state, node, self);
         double sum[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
         double strainEnergy = 0.0, fractureEnergy = 0.0;
         for (RowOffset entry = body.bonds.offsets(node); entry < body.bonds.offsets(node + 1); ++entry) {
@@ -119,11 +148,11 @@ void computeBondForces(const ExecutionSpaceT& space, deck::ForceKernel kernel, c
             if (owner) out.intactNext(b) = 0;
             continue;
           }
-          detail::loadBondEnd(body, state, neighbour, other);
+          detail::loadFramedBondEnd(body, state, neighbour, other);
           const double xi = body.bonds.referenceLength(b);
           MicrobeamResponse response;
           const LocalIndex lower = owner ? node : neighbour, higher = owner ? neighbour : node;
-          const Micromoduli c = bondMicromoduli(body, lower, higher);
+          const Micromoduli c = bondMicromoduli(body, b);
           if (owner)
             evaluateMicrobeam(c, self, other, xi, response);
           else
@@ -134,7 +163,7 @@ void computeBondForces(const ExecutionSpaceT& space, deck::ForceKernel kernel, c
             sum[k] += weight * response.force[selfEnd][k];
             sum[3 + k] += weight * response.moment[selfEnd][k];
           }
-          const bool breaks = response.micropotential >= criticalMicropotential(body, lower, higher, xi);
+          const bool breaks = response.micropotential >= criticalMicropotential(body, b, xi);
           if (owner) out.intactNext(b) = breaks ? 0 : 1;
           strainEnergy += 0.5 * weight * response.micropotential;
           if (breaks) fractureEnergy += 0.5 * weight * response.micropotential;

@@ -68,7 +68,7 @@ void assembleBondTangent(const ExecutionSpaceT& space, const PdBody<MemorySpaceT
         detail::loadBondEnd(body, state, i, ends[0]);
         detail::loadBondEnd(body, state, j, ends[1]);
         double tangent[12][12];
-        microbeamTangent(bondMicromoduli(body, i, j), ends[0], ends[1], body.bonds.referenceLength(b),
+        microbeamTangent(bondMicromoduli(body, b), ends[0], ends[1], body.bonds.referenceLength(b),
                          TangentForm::Symmetric, tangent);
         const double weight = bondVolumeWeight(body, i, j, b);
         for (int r = 0; r < 12; ++r)

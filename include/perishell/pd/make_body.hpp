@@ -5,6 +5,7 @@
 // material (model.md §1-3).
 #include <perishell/mesh/node_geometry.hpp>
 #include <perishell/pd/neighbor_search.hpp>
+#include <perishell/core/rotation.hpp>
 #include <perishell/pd/pd_body.hpp>
 
 #include <optional>
@@ -19,37 +20,146 @@ struct PdMaterial {
   std::optional<double> fractureEnergy;  // G_c [J/m^2]; none: bonds never break
 };
 
-// The discrete horizon sums of the energy differ from the continuum integrals that the
-// micromoduli were calibrated with (model.md §2): with delta = 3 dx and the partial-volume
-// factor, sum_j xi V_j beta falls 13 % short of t * 2 pi delta^3 / 3. Under a homogeneous
-// field a bond's energy weights it by xi (stretch, out-of-plane bending, torsion) or by
-// 1/xi (in-plane bending), so each node gets the ratio continuum / discrete for both
-// moments, t 2 pi delta^3/3 and t 2 pi delta over the sums of xi V_j beta and V_j beta / xi.
-// Interior isotropic states then match exactly; nodes near free edges and pre-cracks get
-// the same boost (the classical surface correction); pre-crack bonds count as missing.
+namespace detail {
+// An orthonormal basis (t1, t2) of the plane normal to the unit vector n: t1 from the
+// coordinate axis least aligned with n. Only the node's own bonds are measured in it.
+KOKKOS_INLINE_FUNCTION void tangentBasis(const double n[3], double t1[3], double t2[3]) {
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (Kokkos::Experimental::fabs(n[k]) < Kokkos::Experimental::fabs(n[axis])) axis = k;
+  for (int k = 0; k < 3; ++k) t1[k] = (k == axis ? 1.0 : 0.0) - n[axis] * n[k];
+  rotation::normalise(t1);
+  rotation::cross(n, t1, t2);
+}
+
+// cos 4 theta and sin 4 theta of the direction d projected on the tangent plane (t1, t2);
+// zero for a direction along the normal. No trigonometry: from cos 2 theta and sin 2 theta.
+KOKKOS_INLINE_FUNCTION void fourthHarmonics(const double d[3], const double t1[3], const double t2[3],
+                                            double& cosine4, double& sine4) {
+  const double u = rotation::dot(d, t1), v = rotation::dot(d, t2);
+  const double squared = u * u + v * v;
+  if (!(squared > 0.0)) {
+    cosine4 = sine4 = 0.0;
+    return;
+  }
+  const double cosine2 = (u * u - v * v) / squared, sine2 = 2.0 * u * v / squared;
+  cosine4 = cosine2 * cosine2 - sine2 * sine2;
+  sine4 = 2.0 * sine2 * cosine2;
+}
+
+// The quadrature factor one end gives a bond of direction d, g (1 + b_c cos 4theta + b_s sin 4theta),
+// from the node's g, g b_c and g b_s.
+KOKKOS_INLINE_FUNCTION double endFactor(const double d[3], const double t1[3], const double t2[3],
+                                        const double factors[3]) {
+  double cosine4, sine4;
+  fourthHarmonics(d, t1, t2, cosine4, sine4);
+  return factors[0] + factors[1] * cosine4 + factors[2] * sine4;
+}
+}  // namespace detail
+
+// The per-bond stiffness scales of model.md §2's micromoduli (PdBody::stiffnessScale).
+// Under a homogeneous membrane strain eps, a bond of unit direction n stores
+// 1/2 c_ax xi (n.eps.n)^2 + 6 (c_bz/xi) (t.eps.n)^2 (t the in-plane normal to n; both
+// ends turn by the chord's spin), and under a homogeneous curvature kappa
+// 1/2 c_by xi (n.kappa.n)^2 + 1/2 c_tor xi (t.kappa.n)^2. In the angle theta of n these are
+// c_ax, c_by, c_tor sums weighted by w = xi V_j beta and a c_bz sum weighted by
+// w = V_j beta / xi, of 1, cos 2theta, sin 2theta, cos 4theta, sin 4theta. The micromoduli
+// were calibrated on continuum integrals, where only the constant moment is non-zero; the
+// discrete sums with delta = 3 dx fall 13 % short in the constant moment and, on a square
+// lattice, carry a fourth harmonic (bonds along the axes against the diagonals). The
+// fourth harmonic enters with opposite signs through (n.eps.n)^2 and (t.eps.n)^2, so it
+// only cancels where c_bz = 0 (nu = 1/3); elsewhere it showed as 7 % in shear at nu = 0.
+// So each node, for each of the two weightings, weights its bonds by
+//   g (1 + b_c cos 4theta + b_s sin 4theta),
+// theta measured in the node's tangent plane (any flat or curved mesh), (b_c, b_s) chosen
+// to cancel the weighted fourth harmonic (a 2x2 solve) and g to make the weighted constant
+// moment equal its continuum value (t 2 pi delta^3 / 3 for xi, t 2 pi delta for 1/xi).
+// Interior nodes of a symmetric lattice then store the plate energy exactly (the second
+// harmonic vanishes by symmetry). |(b_c, b_s)| is capped at 1/2, which keeps every weight
+// at least half of g; the cap only acts at nodes near edges and pre-cracks, whose boost by
+// g is the classical surface correction (pre-crack bonds count as missing). A bond's scale
+// is the mean of its two ends' factors.
 template <class ExecutionSpaceT, class MemorySpaceT>
-void computeQuadratureCorrections(const ExecutionSpaceT& space, PdBody<MemorySpaceT>& body, double horizon,
-                                  double thickness) {
+void computeStiffnessScales(const ExecutionSpaceT& space, PdBody<MemorySpaceT>& body, double horizon,
+                            double thickness) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
   const double pi = 3.14159265358979323846;
-  const double lengthWeightedIntegral = thickness * 2.0 * pi * horizon * horizon * horizon / 3.0;
-  const double inverseLengthWeightedIntegral = thickness * 2.0 * pi * horizon;
-  body.correctionLengthWeighted = VectorView<MemorySpaceT>("pd correction xi", body.numNodes());
-  body.correctionInverseLengthWeighted = VectorView<MemorySpaceT>("pd correction 1/xi", body.numNodes());
+  const double continuumMoment[2] = {thickness * 2.0 * pi * horizon * horizon * horizon / 3.0,
+                                     thickness * 2.0 * pi * horizon};
+  constexpr double largestHarmonicWeight = 0.5;
+  // Per node and weighting: g, g b_c, g b_s.
+  Kokkos::View<double* [2][3], Kokkos::LayoutRight, MemorySpaceT> nodeFactors("pd node quadrature factors",
+                                                                              body.numNodes());
   const auto bonds = body.bonds;
   const auto volumes = body.volumes;
-  const auto lengthWeighted = body.correctionLengthWeighted, inverseLengthWeighted = body.correctionInverseLengthWeighted;
+  const auto positions = body.referencePositions;
+  const auto normals = body.referenceNormals;
   Kokkos::parallel_for(
-      "perishell::pd::computeQuadratureCorrections", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numNodes()),
+      "perishell::pd::computeStiffnessScales::nodes", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numNodes()),
       KOKKOS_LAMBDA(const LocalIndex node) {
-        double lengthSum = 0.0, inverseLengthSum = 0.0;
+        const double n[3] = {normals(node, 0), normals(node, 1), normals(node, 2)};
+        double t1[3], t2[3];
+        detail::tangentBasis(n, t1, t2);
+        // Per weighting: sum w, w c4, w s4, w c4^2, w c4 s4, w s4^2.
+        double sums[2][6] = {};
         for (RowOffset entry = bonds.offsets(node); entry < bonds.offsets(node + 1); ++entry) {
+          const LocalIndex neighbour = bonds.neighbours(entry);
           const RowOffset b = bonds.fullToHalf(entry);
-          const double weighted = volumes(bonds.neighbours(entry)) * bonds.volumeFactor(b);
-          lengthSum += weighted * bonds.referenceLength(b);
-          inverseLengthSum += weighted / bonds.referenceLength(b);
+          const double d[3] = {positions(neighbour, 0) - positions(node, 0), positions(neighbour, 1) - positions(node, 1),
+                               positions(neighbour, 2) - positions(node, 2)};
+          double c4, s4;
+          detail::fourthHarmonics(d, t1, t2, c4, s4);
+          const double volume = volumes(neighbour) * bonds.volumeFactor(b), xi = bonds.referenceLength(b);
+          const double w[2] = {volume * xi, volume / xi};
+          for (int m = 0; m < 2; ++m) {
+            sums[m][0] += w[m];
+            sums[m][1] += w[m] * c4;
+            sums[m][2] += w[m] * s4;
+            sums[m][3] += w[m] * c4 * c4;
+            sums[m][4] += w[m] * c4 * s4;
+            sums[m][5] += w[m] * s4 * s4;
+          }
         }
-        lengthWeighted(node) = lengthSum > 0.0 ? lengthWeightedIntegral / lengthSum : 1.0;
-        inverseLengthWeighted(node) = inverseLengthSum > 0.0 ? inverseLengthWeightedIntegral / inverseLengthSum : 1.0;
+        for (int m = 0; m < 2; ++m) {
+          const double* S = sums[m];
+          const double determinant = S[3] * S[5] - S[4] * S[4];
+          double bc = 0.0, bs = 0.0;
+          if (determinant > 1e-12 * S[0] * S[0]) {
+            bc = -(S[5] * S[1] - S[4] * S[2]) / determinant;
+            bs = -(S[3] * S[2] - S[4] * S[1]) / determinant;
+            const double amplitude = Kokkos::Experimental::sqrt(bc * bc + bs * bs);
+            if (amplitude > largestHarmonicWeight) {
+              bc *= largestHarmonicWeight / amplitude;
+              bs *= largestHarmonicWeight / amplitude;
+            }
+          }
+          const double weighted = S[0] + bc * S[1] + bs * S[2];
+          const double g = weighted > 0.0 ? continuumMoment[m] / weighted : 1.0;
+          nodeFactors(node, m, 0) = g;
+          nodeFactors(node, m, 1) = g * bc;
+          nodeFactors(node, m, 2) = g * bs;
+        }
+      });
+  body.stiffnessScale = decltype(body.stiffnessScale)("pd stiffness scale", bonds.numBonds());
+  const auto scale = body.stiffnessScale;
+  Kokkos::parallel_for(
+      "perishell::pd::computeStiffnessScales::bonds", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, bonds.numBonds()),
+      KOKKOS_LAMBDA(const RowOffset b) {
+        const LocalIndex ends[2] = {bonds.halfBonds(b, 0), bonds.halfBonds(b, 1)};
+        // cos 4theta and sin 4theta do not change when the direction reverses.
+        const double d[3] = {positions(ends[1], 0) - positions(ends[0], 0), positions(ends[1], 1) - positions(ends[0], 1),
+                             positions(ends[1], 2) - positions(ends[0], 2)};
+        for (int m = 0; m < 2; ++m) {
+          double sum = 0.0;
+          for (const LocalIndex node : ends) {
+            const double n[3] = {normals(node, 0), normals(node, 1), normals(node, 2)};
+            double t1[3], t2[3];
+            detail::tangentBasis(n, t1, t2);
+            const double factors[3] = {nodeFactors(node, m, 0), nodeFactors(node, m, 1), nodeFactors(node, m, 2)};
+            sum += detail::endFactor(d, t1, t2, factors);
+          }
+          scale(b, m) = 0.5 * sum;
+        }
       });
 }
 
@@ -116,7 +226,7 @@ PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
         for (int d = 0; d < 3; ++d) normals(k, d) = allNormals(nodes(k), d);
         volumes(k) = allVolumes(nodes(k));
       });
-  computeQuadratureCorrections(space, body, horizon, material.thickness);
+  computeStiffnessScales(space, body, horizon, material.thickness);
   return body;
 }
 

@@ -39,12 +39,13 @@ inline Micromoduli microbeamMicromoduli(double youngModulus, double poissonRatio
   return c;
 }
 
-// The moduli of one bond: the body's micromoduli times the mean of its two ends'
-// quadrature corrections (pd_body.hpp), one factor per weighting.
-KOKKOS_INLINE_FUNCTION Micromoduli correctedMicromoduli(const Micromoduli& c, double lengthWeighted,
-                                                        double inverseLengthWeighted) {
-  return {c.axial * lengthWeighted, c.outOfPlaneBending * lengthWeighted, c.inPlaneBending * inverseLengthWeighted,
-          c.torsion * lengthWeighted};
+// The moduli of one bond: the body's micromoduli times the bond's stiffness scales
+// (PdBody::stiffnessScale), one per weighting of the homogeneous-field energy: by xi
+// (axial, out-of-plane bending, torsion) and by 1/xi (in-plane bending).
+KOKKOS_INLINE_FUNCTION Micromoduli correctedMicromoduli(const Micromoduli& c, double lengthWeightedScale,
+                                                        double inverseLengthWeightedScale) {
+  return {c.axial * lengthWeightedScale, c.outOfPlaneBending * lengthWeightedScale,
+          c.inPlaneBending * inverseLengthWeightedScale, c.torsion * lengthWeightedScale};
 }
 
 // A bond breaks when its micropotential reaches w_c = 2 G_c xi / (t delta^4) (model.md §3):
@@ -76,18 +77,28 @@ struct MicrobeamResponseT {
 using MicrobeamResponse = MicrobeamResponseT<double>;
 
 namespace detail {
-// Orthonormal frame (e1 along the chord, e3 the mean normal made orthogonal to e1,
-// e2 = e3 x e1), as rows of frame. Returns the chord length.
+// Scales a to unit length with one division; returns the length it had and its inverse.
 template <class T>
-KOKKOS_INLINE_FUNCTION T bondFrame(const T chord[3], const T normalI[3], const T normalJ[3], T frame[3][3]) {
+KOKKOS_INLINE_FUNCTION T normaliseOnce(T a[3], T& inverseLength) {
+  const T length = rotation::norm(a);
+  inverseLength = 1.0 / length;
+  for (int k = 0; k < 3; ++k) a[k] *= inverseLength;
+  return length;
+}
+
+// Orthonormal frame (e1 along the chord, e3 the mean normal made orthogonal to e1,
+// e2 = e3 x e1), as rows of frame. Returns the chord length and its inverse.
+template <class T>
+KOKKOS_INLINE_FUNCTION T bondFrame(const T chord[3], const T normalI[3], const T normalJ[3], T frame[3][3],
+                                   T& inverseLength) {
   using namespace rotation;
   for (int k = 0; k < 3; ++k) frame[0][k] = chord[k];
-  const T length = normalise(frame[0]);
-  T meanNormal[3];
-  for (int k = 0; k < 3; ++k) meanNormal[k] = 0.5 * (normalI[k] + normalJ[k]);
-  const T along = dot(meanNormal, frame[0]);
-  for (int k = 0; k < 3; ++k) frame[2][k] = meanNormal[k] - along * frame[0][k];
-  normalise(frame[2]);
+  const T length = normaliseOnce(frame[0], inverseLength);
+  // The mean normal's factor 1/2 drops out in the normalisation.
+  const T along = dot(normalI, frame[0]) + dot(normalJ, frame[0]);
+  for (int k = 0; k < 3; ++k) frame[2][k] = normalI[k] + normalJ[k] - along * frame[0][k];
+  T unused;
+  normaliseOnce(frame[2], unused);
   cross(frame[2], frame[0], frame[1]);
   return length;
 }
@@ -131,28 +142,30 @@ KOKKOS_INLINE_FUNCTION void evaluateMicrobeam(const Micromoduli& c, const Microb
   rotation::apply(j.rotation, referenceNormalJ, currentNormalJ);
   double referenceFrame[3][3];
   T frame[3][3];
-  detail::bondFrame(referenceChord, i.referenceNormal, j.referenceNormal, referenceFrame);
-  const T length = detail::bondFrame(chord, currentNormalI, currentNormalJ, frame);
+  double inverseReferenceChord;
+  detail::bondFrame(referenceChord, i.referenceNormal, j.referenceNormal, referenceFrame, inverseReferenceChord);
+  T inverseLength;
+  const T length = detail::bondFrame(chord, currentNormalI, currentNormalJ, frame, inverseLength);
   T thetaI[3], thetaJ[3];
   detail::relativeRotation(frame, i.rotation, referenceFrame, thetaI);
   detail::relativeRotation(frame, j.rotation, referenceFrame, thetaJ);
 
-  const double xi = referenceLength;
-  const T stretch = (length - xi) / xi;
+  const double xi = referenceLength, inverseXi = 1.0 / referenceLength;
+  const T stretch = (length - xi) * inverseXi;
   const T twist = thetaJ[0] - thetaI[0];
-  const double kBy = 2.0 * c.outOfPlaneBending / xi, kBz = 2.0 * c.inPlaneBending / xi;
+  const double kBy = 2.0 * c.outOfPlaneBending * inverseXi, kBz = 2.0 * c.inPlaneBending * inverseXi;
   const T axialForce = c.axial * stretch;
-  const T torque = c.torsion * twist / xi;
+  const T torque = c.torsion * twist * inverseXi;
   const T momentByI = kBy * (2.0 * thetaI[1] + thetaJ[1]), momentByJ = kBy * (2.0 * thetaJ[1] + thetaI[1]);
   const T momentBzI = kBz * (2.0 * thetaI[2] + thetaJ[2]), momentBzJ = kBz * (2.0 * thetaJ[2] + thetaI[2]);
   out.micropotential =
       0.5 * c.axial * stretch * stretch * xi +
       kBy * (thetaI[1] * thetaI[1] + thetaI[1] * thetaJ[1] + thetaJ[1] * thetaJ[1]) +
       kBz * (thetaI[2] * thetaI[2] + thetaI[2] * thetaJ[2] + thetaJ[2] * thetaJ[2]) +
-      0.5 * c.torsion * twist * twist / xi;
+      0.5 * c.torsion * twist * twist * inverseXi;
 
-  const T shearAlongE3 = (momentByI + momentByJ) / length;
-  const T shearAlongE2 = -(momentBzI + momentBzJ) / length;
+  const T shearAlongE3 = (momentByI + momentByJ) * inverseLength;
+  const T shearAlongE2 = -(momentBzI + momentBzJ) * inverseLength;
   for (int k = 0; k < 3; ++k) {
     // dw/dx_j; dw/dx_i is its negative.
     const T gradientJ = axialForce * frame[0][k] + shearAlongE2 * frame[1][k] + shearAlongE3 * frame[2][k];

@@ -26,11 +26,14 @@ struct PdBody {
   VectorView<MemorySpaceT> volumes;                 // V_i = A_i t [m^3]
   BondList<MemorySpaceT> bonds;
   Micromoduli micromoduli;
-  // Per-node quadrature corrections (see pd/make_body.hpp): continuum over discrete
-  // horizon moments, for the moduli whose energy under a homogeneous field weights a
-  // bond by xi (axial, out-of-plane bending, torsion) and by 1/xi (in-plane bending).
-  VectorView<MemorySpaceT> correctionLengthWeighted;
-  VectorView<MemorySpaceT> correctionInverseLengthWeighted;
+  // Per half bond, the factors its micromoduli are multiplied by (pd/make_body.hpp,
+  // computeStiffnessScales): column 0 scales the moduli whose energy under a homogeneous
+  // field weights a bond by xi (c_ax, c_by, c_tor), column 1 the one weighting it by 1/xi
+  // (c_bz). Each is the mean of the two ends' quadrature factors, so forces stay equal and
+  // opposite. The PD-CCM coupling multiplies both columns by the morphing factor
+  // (alpha_i + alpha_j)/2 of model.md §4. The breaking threshold follows column 0
+  // (pd/bond_forces.hpp, criticalMicropotential).
+  Kokkos::View<double* [2], Kokkos::LayoutRight, MemorySpaceT> stiffnessScale;
   // w_c / xi of model.md §3; infinite when bonds never break.
   double criticalMicropotentialPerLength = std::numeric_limits<double>::infinity();
 
@@ -41,9 +44,15 @@ template <class MemorySpaceT>
 struct PdKinematics {
   CoordinateView<MemorySpaceT> displacements;  // [m]
   RotationView<MemorySpaceT> rotations;        // reference to current
+  // Derived from the two above by the bond force kernel at the start of every evaluation
+  // (pd/bond_forces.hpp, updateNodeFrames), so that bonds read each end's current position
+  // and rotation matrix instead of rebuilding them per bond: columns 0-2 the current
+  // position [m], 3-11 the rotation matrix, row-major.
+  Kokkos::View<double* [12], Kokkos::LayoutRight, MemorySpaceT> nodeFrames;
 
   explicit PdKinematics(LocalIndex numNodes)
-      : displacements("pd displacements", numNodes), rotations("pd rotations", numNodes) {
+      : displacements("pd displacements", numNodes), rotations("pd rotations", numNodes),
+        nodeFrames(Kokkos::view_alloc(Kokkos::WithoutInitializing, "pd node frames"), numNodes) {
     Kokkos::deep_copy(Kokkos::subview(rotations, Kokkos::ALL, 0), 1.0);
   }
 };

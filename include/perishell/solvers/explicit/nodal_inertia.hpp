@@ -33,7 +33,7 @@ NodalInertia<MemorySpaceT> computeNodalInertia(const ExecutionSpaceT& space, con
           const double xi = body.bonds.referenceLength(b);
           const LocalIndex neighbour = body.bonds.neighbours(entry);
           const double weight = pd::bondVolumeWeight(body, node, neighbour, b);
-          const pd::Micromoduli c = pd::bondMicromoduli(body, node, neighbour);
+          const pd::Micromoduli c = pd::bondMicromoduli(body, b);
           const double bending = c.outOfPlaneBending + c.inPlaneBending;
           translational += weight * (c.axial / xi + 12.0 * bending / (xi * xi * xi));
           rotational += weight * (4.0 * bending + c.torsion) / xi;
