@@ -493,8 +493,34 @@ deck::PdRegion readPdRegion(const std::string& name, const Section& region) {
   return result;
 }
 
-deck::Zones readZones(const Section& section) {
-  section.allowOnly({"default", "pd-regions", "pd-ratio"});
+// zones.transition (model.md §4: L_c >= 2 delta). horizon: delta of the deck.
+deck::Transition readTransition(const Section& section, const deck::Zones& zones, double horizon) {
+  deck::Transition transition;
+  transition.width = 2.0 * horizon;
+  if (!section.has("transition")) return transition;
+  // An explicit transition where it cannot act is a deck mistake, not a no-op to ignore.
+  if (!zones.hasPd())
+    section.fail("transition", "needs a PD zone to blend into the CCM (zones.default is ccm and there are no "
+                               "pd-regions and no pd-ratio above 0)");
+  if (zones.defaultKind == deck::ZoneKind::Pd)
+    section.fail("transition", "needs default: ccm (with default: pd every element is PD and there is no CCM "
+                               "to blend into)");
+  const Section block = section.sublist("transition");
+  block.allowOnly({"width", "profile"});
+  transition.width = block.number("width", transition.width);
+  // Relative slack: 2 delta written out in the deck must pass despite round-off.
+  if (!(transition.width >= 2.0 * horizon * (1.0 - 1e-12)))
+    block.fail("width", "must be >= 2 delta = " + formatNumber(2.0 * horizon) +
+                            " m (model.md §4: a transition narrower than two horizons leaves large ghost "
+                            "forces), got " + formatNumber(transition.width));
+  transition.profile = block.choice<deck::TransitionProfile>(
+      "profile", {{"cubic", deck::TransitionProfile::Cubic}, {"linear", deck::TransitionProfile::Linear}},
+      transition.profile);
+  return transition;
+}
+
+deck::Zones readZones(const Section& section, double horizon) {
+  section.allowOnly({"default", "pd-regions", "pd-ratio", "transition"});
   deck::Zones zones;
   zones.defaultKind = section.choice<deck::ZoneKind>(
       "default", {{"pd", deck::ZoneKind::Pd}, {"ccm", deck::ZoneKind::Ccm}}, zones.defaultKind);
@@ -520,6 +546,7 @@ deck::Zones readZones(const Section& section) {
     if (pdRatio.around.empty()) ratio.fail("around", "needs at least one named point");
     zones.pdRatio = pdRatio;
   }
+  zones.transition = readTransition(section, zones, horizon);
   return zones;
 }
 
@@ -688,7 +715,9 @@ deck::Solver readSolver(const Section& section) {
                                     formatNumber(settings.tolerance));
     settings.preconditioner = section.choice<deck::Preconditioner>(
         "preconditioner",
-        {{"jacobi", deck::Preconditioner::Jacobi}, {"block-jacobi", deck::Preconditioner::BlockJacobi}},
+        {{"jacobi", deck::Preconditioner::Jacobi},
+         {"block-jacobi", deck::Preconditioner::BlockJacobi},
+         {"amg", deck::Preconditioner::Amg}},
         settings.preconditioner);
     if (section.has("max-cuts")) {
       const double cuts = section.number("max-cuts");
@@ -915,7 +944,7 @@ Deck parseDeck(const std::string& yamlText, const std::string& sourceName) {
   deck.mesh = readMesh(root.sublist("mesh"), baseDirectory);
   deck.material = readMaterial(root.sublist("material"));
   deck.peridynamics = readPeridynamics(root.sublistOrEmpty("peridynamics"));
-  deck.zones = readZones(root.sublistOrEmpty("zones"));
+  deck.zones = readZones(root.sublistOrEmpty("zones"), deck.peridynamics.horizonFactor * deck.mesh.spacing);
   deck.supports = readSupports(root.sublistOrEmpty("supports"));
   deck.loads = readLoads(root.sublistOrEmpty("loads"));
   deck.curves = readCurves(root.sublistOrEmpty("curves"));

@@ -135,6 +135,17 @@ class ImplicitOutput {
 
 }  // namespace
 
+namespace {
+const char* preconditionerName(deck::Preconditioner preconditioner) {
+  switch (preconditioner) {
+    case deck::Preconditioner::Jacobi: return "Jacobi";
+    case deck::Preconditioner::BlockJacobi: return "6x6 block-Jacobi";
+    case deck::Preconditioner::Amg: return "smoothed-aggregation AMG";
+  }
+  return "?";
+}
+}  // namespace
+
 ImplicitRunSummary runImplicit(const model::Model& model, const std::string& outputDirectory, std::ostream& log) {
   const auto& deck = model.deck;
   const int increments = deck.solver.implicitSettings.increments;
@@ -152,6 +163,7 @@ ImplicitRunSummary runImplicit(const model::Model& model, const std::string& out
   io::ProgressReporter progress(increments, log);
   ImplicitRunSummary summary;
   const auto runStart = std::chrono::steady_clock::now();
+  PhaseSeconds phases;
   for (int increment = 1; increment <= increments; ++increment) {
     IncrementReport report;
     try {
@@ -163,6 +175,12 @@ ImplicitRunSummary runImplicit(const model::Model& model, const std::string& out
                           formatNumber(solver.loadFactor()) + ") is in " + output.xdmfPath());
     }
     summary.cuts += report.cuts;
+    phases.residual += report.seconds.residual;
+    phases.assembly += report.seconds.assembly;
+    phases.constraints += report.seconds.constraints;
+    phases.preconditioner += report.seconds.preconditioner;
+    phases.linearSolve += report.seconds.linearSolve;
+    phases.update += report.seconds.update;
     summary.newtonIterations += report.newtonIterations;
     summary.linearIterations += report.linearIterations;
     const bool last = increment == increments;
@@ -179,12 +197,15 @@ ImplicitRunSummary runImplicit(const model::Model& model, const std::string& out
       .add("increments", std::to_string(increments) + " (" + std::to_string(summary.cuts) + " cuts)")
       .add("Newton iterations", std::to_string(summary.newtonIterations))
       .add("linear iterations", std::to_string(summary.linearIterations) + " (" +
-                                    (deck.solver.implicitSettings.preconditioner == deck::Preconditioner::Jacobi
-                                         ? "Jacobi"
-                                         : "6x6 block-Jacobi") +
-                                    " PCG)")
+                                    preconditionerName(deck.solver.implicitSettings.preconditioner) + " PCG)")
       .add("max displacement", formatNumber(summary.maxDisplacement, 6) + " m")
       .add("wall time", io::formatDuration(summary.wallSeconds))
+      .add("  internal forces", formatNumber(phases.residual) + " s")
+      .add("  tangent assembly", formatNumber(phases.assembly) + " s")
+      .add("  constraints", formatNumber(phases.constraints) + " s")
+      .add("  preconditioner", formatNumber(phases.preconditioner) + " s")
+      .add("  linear solve", formatNumber(phases.linearSolve) + " s")
+      .add("  update", formatNumber(phases.update) + " s")
       .add("setup", formatNumber(setupSeconds) + " s")
       .add("fields", summary.xdmfPath)
       .add("history", summary.historyPath)

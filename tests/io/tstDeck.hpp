@@ -403,7 +403,7 @@ TEST(TEST_CATEGORY, deck_defaults_fill_what_a_minimal_deck_leaves_out) {
   EXPECT_EQ(implicitSettings.increments, 1);
   EXPECT_EQ(implicitSettings.maxIterations, 100);
   EXPECT_DOUBLE_EQ(implicitSettings.tolerance, 1e-8);
-  EXPECT_EQ(implicitSettings.preconditioner, deck::Preconditioner::BlockJacobi);
+  EXPECT_EQ(implicitSettings.preconditioner, deck::Preconditioner::Amg);
   EXPECT_TRUE(implicitDeck.warnings.empty());
 }
 
@@ -672,3 +672,39 @@ TEST(TEST_CATEGORY, deck_unreadable_files_are_reported) {
 }
 
 }  // namespace
+
+TEST(TEST_CATEGORY, deck_zones_transition_defaults_values_and_rules) {
+  const std::string region = "    default: ccm\n    pd-regions:\n      zone:\n        box: {min: [0, 0, -1], max: [1, 1, 1]}\n";
+  // Default: 2 delta = 2 x 3 x 1 mm, cubic, whatever the zones.
+  const Deck plain = parseDeck(baseDeck, "plain.yaml");
+  EXPECT_DOUBLE_EQ(plain.zones.transition.width, 6e-3);
+  EXPECT_EQ(plain.zones.transition.profile, deck::TransitionProfile::Cubic);
+  const Deck given = parseDeck(
+      edited(baseDeck, {{"    default: pd\n", region + "    transition: {width: 8.0e-3, profile: linear}\n"}}), "given.yaml");
+  EXPECT_DOUBLE_EQ(given.zones.transition.width, 8e-3);
+  EXPECT_EQ(given.zones.transition.profile, deck::TransitionProfile::Linear);
+  // Exactly 2 delta, written out, passes.
+  EXPECT_DOUBLE_EQ(
+      parseDeck(edited(baseDeck, {{"    default: pd\n", region + "    transition: {width: 6.0e-3}\n"}}), "exact.yaml")
+          .zones.transition.width,
+      6e-3);
+  const std::vector<BadDeck> cases{
+      {"narrower than 2 delta", {{"    default: pd\n", region + "    transition: {width: 5.0e-3}\n"}},
+       "zones.transition.width", {"must be >= 2 delta = 0.006 m", "model.md §4", "got 0.005"}},
+      {"unknown profile", {{"    default: pd\n", region + "    transition: {profile: quintic}\n"}},
+       "zones.transition.profile", {"quintic"}},
+      {"unknown key", {{"    default: pd\n", region + "    transition: {length: 1.0}\n"}}, "zones.transition.length",
+       {"unknown key", "width, profile"}},
+      {"with default pd", {{"    default: pd\n", "    default: pd\n    transition: {width: 8.0e-3}\n"}},
+       "zones.transition", {"needs default: ccm"}},
+      {"in a pure CCM model", {{"    default: pd\n", "    default: ccm\n    transition: {width: 8.0e-3}\n"}},
+       "zones.transition", {"needs a PD zone"}},
+  };
+  for (const auto& bad : cases) {
+    SCOPED_TRACE(bad.name);
+    const DeckError error = deckErrorOf(edited(baseDeck, bad.edits));
+    EXPECT_EQ(error.keyPath(), bad.keyPath) << error.what();
+    for (const auto& part : bad.reasonParts)
+      EXPECT_NE(error.reason().find(part), std::string::npos) << "reason: " << error.reason();
+  }
+}

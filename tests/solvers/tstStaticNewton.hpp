@@ -215,3 +215,45 @@ TEST(TEST_CATEGORY, static_newton_reports_a_mechanism) {
     EXPECT_NE(message.find("supports"), std::string::npos) << message;
   }
 }
+
+TEST(TEST_CATEGORY, static_newton_sze_cantilever_under_end_shear_pd) {
+  using namespace perishell_test_static_newton;
+  const auto model =
+      stripModel("pd", 0.125, 10.0, endShear, "increments: 20, max-iterations: 60, tolerance: 1.0e-9, preconditioner: amg");
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  EXPECT_LT(worstTipError(solver, model, sze31, 6.698, "Sze 3.1 PD"), 0.03);
+}
+
+namespace perishell_test_static_newton {
+
+// Tip displacements after Sze 3.1 up to P/P_max = 0.5, solved on execution space Space.
+template <class Space>
+std::vector<double> sze31HalfLoadDisplacements(const perishell::model::Model& model) {
+  auto solver = perishell::solvers::makeStaticSolver(Space{}, model);
+  solver.advanceTo(0.5);
+  const auto u = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.kinematics().displacements);
+  return std::vector<double>(u.data(), u.data() + u.size());
+}
+
+}  // namespace perishell_test_static_newton
+
+// The CPU-vs-GPU check: the same converged Newton solve on the host backend (OpenMP)
+// and on the test's backend (CUDA in a CUDA build) agrees to 1e-8 of the largest displacement.
+// The sums of atomic assembly differ in order, so bitwise equality is not expected.
+TEST(TEST_CATEGORY, static_newton_host_and_device_agree) {
+  using namespace perishell_test_static_newton;
+  const auto model = stripModel("ccm", 0.5, 10.0, endShear, "increments: 10, max-iterations: 60, tolerance: 1.0e-10");
+  const auto host = sze31HalfLoadDisplacements<Kokkos::DefaultHostExecutionSpace>(model);
+  const auto device = sze31HalfLoadDisplacements<TEST_EXECSPACE>(model);
+  ASSERT_EQ(host.size(), device.size());
+  double largest = 0.0, difference = 0.0;
+  for (std::size_t k = 0; k < host.size(); ++k) {
+    largest = std::max(largest, std::abs(host[k]));
+    difference = std::max(difference, std::abs(host[k] - device[k]));
+  }
+  std::printf("%s vs %s: largest displacement %.6e, largest difference %.3e (relative %.3e)\n",
+              Kokkos::DefaultHostExecutionSpace::name(), TEST_EXECSPACE::name(), largest, difference,
+              difference / largest);
+  EXPECT_GT(largest, 4.0);  // the tip has moved w ~ 4.9
+  EXPECT_LT(difference, 1e-8 * largest);
+}

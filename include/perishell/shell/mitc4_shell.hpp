@@ -269,7 +269,12 @@ KOKKOS_INLINE_FUNCTION void shellSectionStiffness(const ShellSection& section,
 
 // Linear stiffness K_l (24x24) in the element's flat reference frame, 2x2 Gauss for every
 // term. Depends on the reference geometry only: the caller may cache it per element.
+// membraneBendingScale[q] multiplies the membrane and bending blocks of D at Gauss point q
+// (mesh::bilinear order): the hybrid D_Hb of the PD-CCM coupling (model.md §4, paper eq.
+// 22-23; coupling/morphing.hpp). Transverse shear and drilling keep their full stiffness:
+// eq. 22 subtracts only what the bonds carry, membrane and bending.
 KOKKOS_INLINE_FUNCTION void shellLocalStiffness(const double referencePositions[4][3], const ShellSection& section,
+                                                const double membraneBendingScale[mesh::bilinear::numGaussPoints],
                                                 double localStiffness[shellDofCount][shellDofCount]) {
   const ShellReference reference = shellReference(referencePositions);
   double D[shellStrainCount][shellStrainCount];
@@ -285,7 +290,8 @@ KOKKOS_INLINE_FUNCTION void shellLocalStiffness(const double referencePositions[
       for (int s = 0; s < shellStrainCount; ++s) {
         double sum = 0.0;
         for (int k = 0; k < shellStrainCount; ++k) sum += D[s][k] * B[k][c];
-        stress[s] = weight * sum;
+        // D is block diagonal (membrane, bending | shear, drilling), so scaling rows 0-5 is D_Hb.
+        stress[s] = (s < 6 ? membraneBendingScale[q] : 1.0) * weight * sum;
       }
       for (int r = 0; r <= c; ++r) {
         double sum = 0.0;
@@ -296,6 +302,12 @@ KOKKOS_INLINE_FUNCTION void shellLocalStiffness(const double referencePositions[
   }
   for (int c = 0; c < shellDofCount; ++c)
     for (int r = c + 1; r < shellDofCount; ++r) localStiffness[r][c] = localStiffness[c][r];
+}
+
+KOKKOS_INLINE_FUNCTION void shellLocalStiffness(const double referencePositions[4][3], const ShellSection& section,
+                                                double localStiffness[shellDofCount][shellDofCount]) {
+  const double fullSection[mesh::bilinear::numGaussPoints] = {1.0, 1.0, 1.0, 1.0};
+  shellLocalStiffness(referencePositions, section, fullSection, localStiffness);
 }
 
 namespace detail {

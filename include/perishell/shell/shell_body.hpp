@@ -19,6 +19,10 @@ struct ShellBody {
   QuadConnectivityView<MemorySpaceT> quads;          // the CCM elements
   // K_l of each element in its reference frame (24 x 24, cached: the element is flat).
   Kokkos::View<double* [24][24], Kokkos::LayoutRight, MemorySpaceT> localStiffness;
+  // Per element and Gauss point, the factor on the membrane and bending blocks of D that
+  // K_l was built with: 1 for a plain CCM element, 1 - alpha_bar in the PD-CCM transition
+  // (model.md §4, coupling/morphing.hpp).
+  Kokkos::View<double* [4], Kokkos::LayoutRight, MemorySpaceT> membraneBendingScale;
 
   LocalIndex numElements() const { return static_cast<LocalIndex>(quads.extent(0)); }
 };
@@ -43,15 +47,23 @@ KOKKOS_INLINE_FUNCTION void loadElement(const ShellBody<MemorySpaceT>& body, con
 
 }  // namespace detail
 
-// The CCM elements of a mesh (elementIsCcm(e) != 0) with their section. Throws
-// std::invalid_argument naming the first degenerate element.
+// The CCM elements of a mesh (body element k is mesh element ccmElements[k]) with their
+// section, the membrane and bending blocks of D scaled per element and Gauss point by
+// membraneBendingScale (numElements x 4, on the device). Throws std::invalid_argument
+// naming the first degenerate element.
 template <class ExecutionSpaceT>
-ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(const ExecutionSpaceT& space,
-                                                                const mesh::HostQuadMesh& mesh,
-                                                                const std::vector<LocalIndex>& ccmElements,
-                                                                const ShellSection& section) {
+ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
+    const ExecutionSpaceT& space, const mesh::HostQuadMesh& mesh, const std::vector<LocalIndex>& ccmElements,
+    const ShellSection& section,
+    const Kokkos::View<double* [4], Kokkos::LayoutRight, typename ExecutionSpaceT::memory_space>& membraneBendingScale) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   using MemorySpaceT = typename ExecutionSpaceT::memory_space;
+  if (membraneBendingScale.extent(0) != ccmElements.size()) {
+    std::ostringstream message;
+    message << "makeShellBody: " << membraneBendingScale.extent(0) << " rows of membrane-bending scales for "
+            << ccmElements.size() << " elements";
+    throw std::invalid_argument(message.str());
+  }
   QuadConnectivityView<Kokkos::HostSpace> quads("ccm quads", ccmElements.size());
   for (std::size_t k = 0; k < ccmElements.size(); ++k) {
     double reference[4][3];
@@ -65,6 +77,7 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(const ExecutionS
   body.referencePositions = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, mesh.coordinates);
   body.quads = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, quads);
   body.localStiffness = decltype(body.localStiffness)("shell local stiffness", ccmElements.size());
+  body.membraneBendingScale = membraneBendingScale;
   const auto b = body;
   Kokkos::parallel_for(
       "perishell::shell::localStiffness", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, b.numElements()),
@@ -72,12 +85,26 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(const ExecutionS
         double reference[4][3];
         for (int a = 0; a < 4; ++a)
           for (int d = 0; d < 3; ++d) reference[a][d] = b.referencePositions(b.quads(e, a), d);
+        const double scale[4] = {b.membraneBendingScale(e, 0), b.membraneBendingScale(e, 1),
+                                 b.membraneBendingScale(e, 2), b.membraneBendingScale(e, 3)};
         double K[24][24];
-        shellLocalStiffness(reference, section, K);
+        shellLocalStiffness(reference, section, scale, K);
         for (int r = 0; r < 24; ++r)
           for (int s = 0; s < 24; ++s) b.localStiffness(e, r, s) = K[r][s];
       });
   return body;
+}
+
+// The same with the full section everywhere (a model without PD-CCM coupling).
+template <class ExecutionSpaceT>
+ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(const ExecutionSpaceT& space,
+                                                                const mesh::HostQuadMesh& mesh,
+                                                                const std::vector<LocalIndex>& ccmElements,
+                                                                const ShellSection& section) {
+  Kokkos::View<double* [4], Kokkos::LayoutRight, typename ExecutionSpaceT::memory_space> fullSection(
+      "shell membrane-bending scale", ccmElements.size());
+  Kokkos::deep_copy(space, fullSection, 1.0);
+  return makeShellBody(space, mesh, ccmElements, section, fullSection);
 }
 
 // forces -= internal forces of every element (the caller's forces are the loads acting on

@@ -148,6 +148,28 @@ LocalIndex invertDiagonalBlocks(const CrsMatrix<ExecutionSpaceT>& A, int blockSi
   return firstFailedBlock == INT_MAX ? -1 : firstFailedBlock;
 }
 
+// Throws std::runtime_error describing why node's diagonal block could not be inverted.
+template <class ExecutionSpaceT>
+[[noreturn]] void throwFailedBlock(const std::string& who, LocalIndex node, int blockSize,
+                                 const BlockDiagnosisView<ExecutionSpaceT>& diagnoses) {
+  const auto diagnosis = Kokkos::create_mirror_view_and_copy(
+      Kokkos::HostSpace(), Kokkos::subview(diagnoses, node, Kokkos::ALL()));
+  const int dof = diagnosis(1);
+  std::ostringstream msg;
+  msg << who << ": the diagonal block of node " << node << " (rows " << node * blockSize << " to "
+      << (node + 1) * blockSize - 1 << ") ";
+  if (diagnosis(0) == BlockNotFinite) {
+    msg << "has a NaN or Inf entry in its local DOF " << dof
+        << " row: the assembled matrix is not finite there (a degenerate element or a NaN state?)";
+  } else {
+    msg << (diagnosis(0) == BlockEmptyRow ? "has an all-zero row for its local DOF "
+                                          : "is singular (no usable pivot for its local DOF ")
+        << dof << (diagnosis(0) == BlockEmptyRow ? "" : ")") << ": node " << node
+        << " has no stiffness in some DOF: missing support or a rotation DOF no element touches?";
+  }
+  throw std::runtime_error(msg.str());
+}
+
 // y(row, :) = sum_c B(row / size)(row % size, c) x(first + c, :) with B = inverse or its transpose.
 template <class InverseView, class MultiView>
 void applyBlockInverse(const InverseView& inverses, bool transposed, const MultiView& x, const MultiView& y) {
@@ -208,7 +230,7 @@ class BlockJacobiPreconditioner final : public Belos::Operator<double> {
     const detail::BlockDiagnosisView<ExecutionSpaceT> diagnoses(
         Kokkos::view_alloc(Kokkos::WithoutInitializing, "perishell::belos::block_diagnoses"), numBlocks);
     const LocalIndex failedBlock = detail::invertDiagonalBlocks(A, blockSize, inverses_, diagnoses);
-    if (failedBlock >= 0) throwFailedBlock(who, failedBlock, blockSize, diagnoses);
+    if (failedBlock >= 0) detail::throwFailedBlock<ExecutionSpaceT>(who, failedBlock, blockSize, diagnoses);
   }
 
   int blockSize() const { return static_cast<int>(inverses_.extent(1)); }
@@ -228,26 +250,6 @@ class BlockJacobiPreconditioner final : public Belos::Operator<double> {
   bool HasApplyTranspose() const override { return true; }
 
  private:
-  [[noreturn]] static void throwFailedBlock(const char* who, LocalIndex node, int blockSize,
-                                            const detail::BlockDiagnosisView<ExecutionSpaceT>& diagnoses) {
-    const auto diagnosis = Kokkos::create_mirror_view_and_copy(
-        Kokkos::HostSpace(), Kokkos::subview(diagnoses, node, Kokkos::ALL()));
-    const int dof = diagnosis(1);
-    std::ostringstream msg;
-    msg << who << ": the diagonal block of node " << node << " (rows " << node * blockSize << " to "
-        << (node + 1) * blockSize - 1 << ") ";
-    if (diagnosis(0) == detail::BlockNotFinite) {
-      msg << "has a NaN or Inf entry in its local DOF " << dof
-          << " row: the assembled matrix is not finite there (a degenerate element or a NaN state?)";
-    } else {
-      msg << (diagnosis(0) == detail::BlockEmptyRow ? "has an all-zero row for its local DOF "
-                                                    : "is singular (no usable pivot for its local DOF ")
-          << dof << (diagnosis(0) == detail::BlockEmptyRow ? "" : ")") << ": node " << node
-          << " has no stiffness in some DOF: missing support or a rotation DOF no element touches?";
-    }
-    throw std::runtime_error(msg.str());
-  }
-
   inverse_type inverses_;
 };
 

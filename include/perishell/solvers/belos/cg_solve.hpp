@@ -32,7 +32,9 @@ struct CgOptions {
   // (Belos' implicit residual, scaled by "Norm of Initial Residual", its default).
   double tolerance = 1e-10;
   int maxIterations = 1000;
-  enum class Preconditioner { None, Jacobi, BlockJacobi } preconditioner = Preconditioner::Jacobi;
+  // Amg (smoothed-aggregation multigrid, solvers/multigrid) needs node positions, so the
+  // caller builds it and passes it to solveCg; the others are built from A alone.
+  enum class Preconditioner { None, Jacobi, BlockJacobi, Amg } preconditioner = Preconditioner::Jacobi;
   // Rows per diagonal block for BlockJacobi: the DOF of one node (6 for a shell node).
   int blockSize = 6;
   // On a CG breakdown, restart from the initial guess with GMRES instead of throwing.
@@ -50,14 +52,15 @@ struct CgResult {
   std::string breakdown;      // why CG broke down when method is "GMRES", else empty
 };
 
-// The preconditioner names of the input deck: "none", "jacobi", "block-jacobi".
+// The preconditioner names of the input deck: "none", "jacobi", "block-jacobi", "amg".
 inline CgOptions::Preconditioner preconditionerFromName(const std::string& name) {
   using Preconditioner = CgOptions::Preconditioner;
   if (name == "none") return Preconditioner::None;
   if (name == "jacobi") return Preconditioner::Jacobi;
   if (name == "block-jacobi") return Preconditioner::BlockJacobi;
+  if (name == "amg") return Preconditioner::Amg;
   throw std::invalid_argument("perishell::belos: unknown preconditioner '" + name +
-                              "'; valid names are none, jacobi, block-jacobi");
+                              "'; valid names are none, jacobi, block-jacobi, amg");
 }
 
 namespace detail {
@@ -82,6 +85,10 @@ Teuchos::RCP<const Belos::Operator<double>> makePreconditioner(const CrsMatrix<E
     case CgOptions::Preconditioner::Jacobi: return Teuchos::rcp(new JacobiPreconditioner<ExecutionSpaceT>(A));
     case CgOptions::Preconditioner::BlockJacobi:
       return Teuchos::rcp(new BlockJacobiPreconditioner<ExecutionSpaceT>(A, options.blockSize));
+    case CgOptions::Preconditioner::Amg:
+      throw std::invalid_argument(
+          "perishell::belos::solveCg: the amg preconditioner needs the node positions: build a "
+          "multigrid::SmoothedAggregationPreconditioner and pass it to solveCg");
   }
   throw std::invalid_argument("perishell::belos::solveCg: unknown preconditioner " +
                               std::to_string(static_cast<int>(options.preconditioner)));
@@ -126,25 +133,11 @@ CgResult runSolver(SolverManager& solver, const std::string& method, const std::
   return CgResult{status == Belos::Converged, solver.getNumIters(), solver.achievedTol(), method, breakdown};
 }
 
-}  // namespace detail
-
-// Solves A x = b, meant for symmetric positive definite A (CG). x holds the initial guess on
-// entry and the solution on return (also when the solver did not converge); b is not
-// modified. Both are used in place, without copies. When CG breaks down (A or the
-// preconditioner not SPD) and options.fallbackOnBreakdown is set, x is reset to the initial
-// guess and GMRES solves instead (result.method, result.breakdown say so); without it,
-// std::runtime_error. Throws std::invalid_argument for mismatched sizes or options,
-// std::runtime_error for a NaN residual or a preconditioner that cannot be built.
+// Throws std::invalid_argument for mismatched sizes, bad options or aliased x and b.
 template <class ExecutionSpaceT>
-CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
-                 const Kokkos::View<const double*, typename ExecutionSpaceT::memory_space>& b,
-                 const VectorView<typename ExecutionSpaceT::memory_space>& x, const CgOptions& options = {}) {
-  static_assert(Kokkos::is_execution_space<ExecutionSpaceT>::value, "solveCg needs a Kokkos execution space");
-  using memory_space = typename ExecutionSpaceT::memory_space;
-  using MV = Belos::MultiVec<double>;
-  using OP = Belos::Operator<double>;
-  using Unmanaged2D = Kokkos::View<double**, Kokkos::LayoutLeft, memory_space, Kokkos::MemoryTraits<Kokkos::Unmanaged>>;
-
+void checkCgArguments(const CrsMatrix<ExecutionSpaceT>& A,
+                      const Kokkos::View<const double*, typename ExecutionSpaceT::memory_space>& b,
+                      const VectorView<typename ExecutionSpaceT::memory_space>& x, const CgOptions& options) {
   const auto n = static_cast<std::size_t>(A.numRows());
   if (A.numRows() != A.numCols() || b.extent(0) != n || x.extent(0) != n) {
     std::ostringstream msg;
@@ -161,10 +154,38 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
     throw std::invalid_argument("perishell::belos::solveCg: gmresRestart must be at least 1, got " +
                                 std::to_string(options.gmresRestart));
   }
-  if (n == 0) return CgResult{true, 0, 0.0, "CG", ""};
-  if (x.data() < b.data() + n && b.data() < x.data() + n) {
+  if (n != 0 && x.data() < b.data() + n && b.data() < x.data() + n) {
     throw std::invalid_argument("perishell::belos::solveCg: x and b share storage");
   }
+}
+
+}  // namespace detail
+
+// Solves A x = b, meant for symmetric positive definite A (CG). x holds the initial guess on
+// entry and the solution on return (also when the solver did not converge); b is not
+// modified. Both are used in place, without copies. When CG breaks down (A or the
+// preconditioner not SPD) and options.fallbackOnBreakdown is set, x is reset to the initial
+// guess and GMRES solves instead (result.method, result.breakdown say so); without it,
+// std::runtime_error. Throws std::invalid_argument for mismatched sizes or options,
+// std::runtime_error for a NaN residual or a preconditioner that cannot be built.
+//
+// preconditioner: a prebuilt operator (M ~ A^-1, kept across solves, e.g. a multigrid
+// hierarchy updated per Newton iteration) used instead of options.preconditioner; null for
+// none.
+template <class ExecutionSpaceT>
+CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
+                 const Kokkos::View<const double*, typename ExecutionSpaceT::memory_space>& b,
+                 const VectorView<typename ExecutionSpaceT::memory_space>& x, const CgOptions& options,
+                 const Teuchos::RCP<const Belos::Operator<double>>& preconditioner) {
+  static_assert(Kokkos::is_execution_space<ExecutionSpaceT>::value, "solveCg needs a Kokkos execution space");
+  using memory_space = typename ExecutionSpaceT::memory_space;
+  using MV = Belos::MultiVec<double>;
+  using OP = Belos::Operator<double>;
+  using Unmanaged2D = Kokkos::View<double**, Kokkos::LayoutLeft, memory_space, Kokkos::MemoryTraits<Kokkos::Unmanaged>>;
+
+  detail::checkCgArguments(A, b, x, options);
+  const auto n = static_cast<std::size_t>(A.numRows());
+  if (n == 0) return CgResult{true, 0, 0.0, "CG", ""};
 
   // Single-column LayoutLeft views over the caller's memory, so Belos updates x in place.
   // Belos only reads b (LinearProblem takes it as RCP<const MV>), so casting away const is safe.
@@ -173,7 +194,6 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
   const Teuchos::RCP<MV> X = Teuchos::rcp(new KokkosMultiVector<ExecutionSpaceT>(x2d));
   const Teuchos::RCP<const MV> B = Teuchos::rcp(new KokkosMultiVector<ExecutionSpaceT>(b2d));
   const Teuchos::RCP<const OP> op = Teuchos::rcp(new CrsOperator<ExecutionSpaceT>(A));
-  const Teuchos::RCP<const OP> preconditioner = detail::makePreconditioner(A, options);
 
   // CG overwrites x as it goes; the fallback restarts from the caller's guess.
   VectorView<memory_space> initialGuess;
@@ -214,6 +234,15 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
   const CgResult result = detail::runSolver(gmres, "GMRES", breakdown);
   ExecutionSpaceT().fence();
   return result;
+}
+
+// As above, with the preconditioner options.preconditioner builds from A.
+template <class ExecutionSpaceT>
+CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
+                 const Kokkos::View<const double*, typename ExecutionSpaceT::memory_space>& b,
+                 const VectorView<typename ExecutionSpaceT::memory_space>& x, const CgOptions& options = {}) {
+  detail::checkCgArguments(A, b, x, options);
+  return solveCg<ExecutionSpaceT>(A, b, x, options, detail::makePreconditioner(A, options));
 }
 
 }  // namespace perishell::belos

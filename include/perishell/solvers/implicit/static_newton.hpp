@@ -3,7 +3,9 @@
 // control. Per iteration the out-of-balance force r = P(s) - F_int(u) and the tangent K_T
 // are assembled on the device from the shell elements and the PD bonds (atomic_add into a
 // 6x6-block CRS matrix), supports are eliminated symmetrically, K_T du = r is solved by
-// Belos PCG, translations are added and rotations composed, R <- exp(dphi) R (model.md §5).
+// Belos PCG (block-Jacobi or smoothed-aggregation multigrid preconditioner; the multigrid
+// hierarchy is built at the first solve and updated, not rebuilt, at every later one),
+// translations are added and rotations composed, R <- exp(dphi) R (model.md §5).
 // An increment that does not converge is restored and bisected, a bounded number of times.
 // The state lives on the device; callers copy it to the host only for output.
 #include <perishell/assembly/dirichlet.hpp>
@@ -12,8 +14,12 @@
 #include <perishell/shell/shell_body.hpp>
 #include <perishell/solvers/belos/cg_solve.hpp>
 #include <perishell/solvers/explicit/external_actions.hpp>
+#include <perishell/solvers/multigrid/smoothed_aggregation.hpp>
 
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -38,7 +44,12 @@ Kokkos::View<LocalIndex* [2], Kokkos::LayoutRight, MemorySpaceT> bondEndNodes(co
 
 struct NewtonOptions {
   int maxIterations = 100;
-  // Converged when |r_free| <= tolerance * max(|P(s)|, |reactions|) (2-norms over all DOF).
+  // Converged on the residual when |r_free| <= tolerance * max(|P(s)|, |reactions|) (2-norms
+  // over all DOF), or on the displacement increment when the last correction's largest
+  // translation is <= tolerance * the increment's largest translation while |r_free| <=
+  // sqrt(tolerance) * max(|P|, |reactions|): Newton has then stopped moving, and what is left
+  // of r is the round-off of the internal forces (sums of large element and bond forces that
+  // cancel), which at small load levels can exceed tolerance * |P|.
   double tolerance = 1e-8;
   int maxCuts = 8;  // bisections in a row before giving up
   belos::CgOptions::Preconditioner preconditioner = belos::CgOptions::Preconditioner::BlockJacobi;
@@ -51,13 +62,42 @@ class NewtonFailure : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Wall time of the phases of the paper's Table 3, summed over the Newton iterations of an
+// advance (each phase fenced, so the times are the device's).
+struct PhaseSeconds {
+  double residual = 0.0;        // loads and internal forces (stress update)
+  double assembly = 0.0;        // tangent into the CRS values (atomic_add)
+  double constraints = 0.0;     // Dirichlet elimination
+  double preconditioner = 0.0;  // set-up or update of the preconditioner
+  double linearSolve = 0.0;     // PCG
+  double update = 0.0;          // u += du, R <- exp(dphi) R
+};
+
 // What it took to reach one load level.
 struct IncrementReport {
   double loadFactor = 0.0;
   int attempts = 0, cuts = 0, newtonIterations = 0;
   long long linearIterations = 0;
   double relativeResidual = 0.0;
+  // Whether the last increment converged on the displacement increment rather than the residual.
+  bool convergedOnDisplacement = false;
+  PhaseSeconds seconds;
 };
+
+namespace detail {
+inline std::string scientific(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3e", value);
+  return text;
+}
+
+// Seconds since start, after the space's work is done.
+template <class ExecutionSpaceT>
+double secondsSince(const ExecutionSpaceT& space, std::chrono::steady_clock::time_point start) {
+  space.fence();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+}  // namespace detail
 
 template <class ExecutionSpaceT>
 class StaticNewtonSolver {
@@ -149,21 +189,33 @@ class StaticNewtonSolver {
   // else why not.
   std::string iterate(double target, IncrementReport& report) {
     applyPrescribedValues(target);
-    double initialResidual = 0.0;
+    double initialResidual = 0.0, lastCorrection = 0.0;
+    using Clock = std::chrono::steady_clock;
     for (int iteration = 0;; ++iteration) {
+      auto start = Clock::now();
       const auto norms = computeOutOfBalance(target);
+      report.seconds.residual += detail::secondsSince(space_, start);
       if (!std::isfinite(norms.free) || !std::isfinite(norms.reference))
         return "the out-of-balance force is not finite at iteration " + std::to_string(iteration);
       const double reference = std::max(norms.reference, 1e-300);
       report.relativeResidual = norms.free / reference;
+      report.convergedOnDisplacement = false;
       if (norms.free <= options_.tolerance * reference) return "";
+      if (iteration > 0 && lastCorrection <= options_.tolerance * largestTranslation(true) &&
+          norms.free <= std::sqrt(options_.tolerance) * reference) {
+        report.convergedOnDisplacement = true;
+        return "";
+      }
       if (iteration == 0) initialResidual = norms.free;
       if (iteration >= options_.maxIterations)
         return "no convergence in " + std::to_string(options_.maxIterations) + " iterations (relative residual " +
-               std::to_string(report.relativeResidual) + ")";
+               detail::scientific(report.relativeResidual) + ", tolerance " + detail::scientific(options_.tolerance) +
+               ")";
       if (iteration > 2 && norms.free > 1e4 * initialResidual)
-        return "diverging (residual grew " + std::to_string(norms.free / initialResidual) + " x)";
+        return "diverging (residual grew " + detail::scientific(norms.free / initialResidual) + " x)";
+      start = Clock::now();
       assembleTangent();
+      report.seconds.assembly += detail::secondsSince(space_, start);
       belos::CgOptions linear;
       linear.preconditioner = options_.preconditioner;
       linear.maxIterations = options_.maxLinearIterations;
@@ -173,7 +225,9 @@ class StaticNewtonSolver {
       linear.tolerance = std::clamp(0.1 * options_.tolerance * reference / norms.free, 1e-10, 1e-3);
       // r is the right-hand side in place: the next iteration evaluates it afresh.
       const VectorView<Memory> rhs = flatOutOfBalance();
+      start = Clock::now();
       assembly::eliminateDirichlet(space_, pattern_.rowMap, pattern_.columns, values_, rhs, isConstrained_, zerosConst());
+      report.seconds.constraints += detail::secondsSince(space_, start);
       const auto numRows = static_cast<LocalIndex>(rhs.extent(0));
       const Matrix K("perishell::newton::tangent", numRows, numRows, static_cast<RowOffset>(values_.extent(0)), values_,
                      pattern_.rowMap, pattern_.columns);
@@ -182,11 +236,16 @@ class StaticNewtonSolver {
       belos::CgResult result;
       std::string linearFailure;
       try {
-        result = belos::solveCg<ExecutionSpaceT>(K, rhs, solution, linear);
+        start = Clock::now();
+        const auto preconditioner = preconditionerFor(K, linear);
+        report.seconds.preconditioner += detail::secondsSince(space_, start);
+        start = Clock::now();
+        result = belos::solveCg<ExecutionSpaceT>(K, rhs, solution, linear, preconditioner);
+        report.seconds.linearSolve += detail::secondsSince(space_, start);
         if (!result.converged && !(result.achievedTolerance < 1e-2))
           linearFailure = "the linear solve did not converge (" + std::to_string(result.iterations) + " " +
                           result.method + " iterations, relative residual " +
-                          std::to_string(result.achievedTolerance) + ")";
+                          detail::scientific(result.achievedTolerance) + ")";
       } catch (const std::runtime_error& error) {
         linearFailure = std::string("the linear solve failed: ") + error.what();
       }
@@ -197,8 +256,30 @@ class StaticNewtonSolver {
       if (!linearFailure.empty()) return linearFailure;
       ++report.newtonIterations;
       report.linearIterations += result.iterations;
+      start = Clock::now();
       applyCorrection();
+      lastCorrection = largestTranslation(false);
+      report.seconds.update += detail::secondsSince(space_, start);
     }
+  }
+
+  // Largest |translation| of the last correction du, or of the increment (u minus the state
+  // saved at its start).
+  double largestTranslation(bool ofIncrement) const {
+    const auto du = correction_;
+    const auto u = state_.displacements;
+    const auto start = saved_.displacements;
+    double largest = 0.0;
+    Kokkos::parallel_reduce(
+        "perishell::newton::largestTranslation", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes_),
+        KOKKOS_LAMBDA(const LocalIndex node, double& value) {
+          for (int d = 0; d < 3; ++d) {
+            const double magnitude = Kokkos::Experimental::fabs(ofIncrement ? u(node, d) - start(node, d) : du(node, d));
+            value = magnitude > value ? magnitude : value;
+          }
+        },
+        Kokkos::Max<double>(largest));
+    return largest;
   }
 
   struct ResidualNorms {
@@ -244,6 +325,32 @@ class StaticNewtonSolver {
         },
         squared);
     return std::sqrt(squared);
+  }
+
+  // The block-Jacobi family is rebuilt from K; the multigrid hierarchy is built once (its
+  // aggregates and symbolic products depend only on the pattern) and updated with K and the
+  // current node positions (its rigid-body modes).
+  Teuchos::RCP<const Belos::Operator<double>> preconditionerFor(const Matrix& K, const belos::CgOptions& linear) {
+    if (options_.preconditioner != belos::CgOptions::Preconditioner::Amg) return belos::detail::makePreconditioner(K, linear);
+    updateCurrentPositions();
+    if (multigrid_)
+      multigrid_->update(K, currentPositions_);
+    else
+      multigrid_ = std::make_shared<multigrid::SmoothedAggregationPreconditioner<ExecutionSpaceT>>(space_, K, currentPositions_);
+    return Teuchos::rcp<const Belos::Operator<double>>(multigrid_.get(), false);
+  }
+
+  void updateCurrentPositions() {
+    if (currentPositions_.extent(0) != static_cast<std::size_t>(numNodes_))
+      currentPositions_ = CoordinateView<Memory>("perishell::newton::currentPositions", numNodes_);
+    const auto reference = shell_ ? shell_->referencePositions : pd_->referencePositions;
+    const auto u = state_.displacements;
+    const auto x = currentPositions_;
+    Kokkos::parallel_for(
+        "perishell::newton::currentPositions", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes_),
+        KOKKOS_LAMBDA(const LocalIndex node) {
+          for (int d = 0; d < 3; ++d) x(node, d) = reference(node, d) + u(node, d);
+        });
   }
 
   void assembleTangent() {
@@ -344,6 +451,8 @@ class StaticNewtonSolver {
   VectorView<Memory> fractureScratch_;
   assembly::NodalBlockPattern<Memory> pattern_;
   VectorView<Memory> values_;
+  CoordinateView<Memory> currentPositions_;
+  std::shared_ptr<multigrid::SmoothedAggregationPreconditioner<ExecutionSpaceT>> multigrid_;
   double loadFactor_ = 0.0;
 };
 

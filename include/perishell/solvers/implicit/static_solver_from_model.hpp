@@ -40,9 +40,11 @@ StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& spac
   options.maxIterations = settings.maxIterations;
   options.tolerance = settings.tolerance;
   options.maxCuts = settings.maxCuts;
-  options.preconditioner = settings.preconditioner == deck::Preconditioner::Jacobi
-                               ? belos::CgOptions::Preconditioner::Jacobi
-                               : belos::CgOptions::Preconditioner::BlockJacobi;
+  switch (settings.preconditioner) {
+    case deck::Preconditioner::Jacobi: options.preconditioner = belos::CgOptions::Preconditioner::Jacobi; break;
+    case deck::Preconditioner::BlockJacobi: options.preconditioner = belos::CgOptions::Preconditioner::BlockJacobi; break;
+    case deck::Preconditioner::Amg: options.preconditioner = belos::CgOptions::Preconditioner::Amg; break;
+  }
   return StaticNewtonSolver<ExecutionSpaceT>(space, model.shell.mesh.numNodes(), std::move(shellBody),
                                              std::move(pdBody), makeExternalActions<Memory>(model), options);
 }

@@ -1,0 +1,646 @@
+#pragma once
+// Smoothed-aggregation algebraic multigrid (Vanek, Mandel, Brezina 1996; the scheme of
+// ML/MueLu) as a Belos preconditioner for the 6-DOF-per-node shell/PD tangent. Thin shells
+// are badly conditioned (bending stiffness ~ t^3, model.md §6): nodal block Jacobi needs
+// PCG iterations growing like h^-2, one V-cycle of this hierarchy keeps them nearly mesh
+// independent.
+//
+// Per level l (A_0 = the tangent, 6 DOF per node):
+// - nodes are aggregated greedily (aggregation.hpp, host, once per pattern);
+// - the near-null space B_l (6 columns) is, on the finest level, the 6 rigid-body modes of
+//   each node in the current configuration (u = t, theta = 0; u = w x (x - x_c), theta = w),
+//   zero on constrained DOF (rows holding only their diagonal after eliminateDirichlet);
+// - the tentative prolongator P_tent is B_l orthonormalised per aggregate (thin QR, one
+//   thread per aggregate), and R of that QR is the next level's near-null space, so
+//   P_tent B_{l+1} = B_l and coarse nodes carry 6 DOF again;
+// - P = (I - omega D^-1 A) P_tent with D the 6x6 nodal block diagonal and
+//   omega = 4 / (3 lambda_max(D^-1 A)) (power iterations);
+// - A_{l+1} = P^T A P by Kokkos Kernels spgemm (symbolic once, numeric on update()).
+// The coarsest matrix (a few hundred DOF) is inverted densely on the host (Eigen) at setup
+// and applied on the device as a dense matrix-vector product.
+//
+// One V-cycle with the same Chebyshev smoother (block-Jacobi scaled, a polynomial in
+// D^-1 A, hence self-adjoint in the A inner product) before and after the coarse correction,
+// and R = P^T exactly, so the preconditioner is symmetric, as CG needs. Apply() runs only
+// device kernels.
+#include <perishell/core/types.hpp>
+#include <perishell/solvers/belos/block_jacobi.hpp>
+#include <perishell/solvers/belos/crs_operator.hpp>
+#include <perishell/solvers/belos/kokkos_multivector.hpp>
+#include <perishell/solvers/multigrid/aggregation.hpp>
+
+#include <BelosOperator.hpp>
+#include <BelosTypes.hpp>
+
+#include <KokkosBlas1_axpby.hpp>
+#include <KokkosBlas1_nrm2.hpp>
+#include <KokkosBlas1_scal.hpp>
+#include <KokkosBlas2_gemv.hpp>
+#include <KokkosKernels_Handle.hpp>
+#include <KokkosKernels_SparseUtils.hpp>
+#include <KokkosSparse_spgemm.hpp>
+#include <KokkosSparse_spmv.hpp>
+#include <Kokkos_Core.hpp>
+#include <Kokkos_Random.hpp>
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace perishell::multigrid {
+
+inline constexpr int dofPerNode = 6;
+
+struct SmoothedAggregationOptions {
+  // Coarsening stops at this many nodes (6 DOF each); that level is inverted densely.
+  LocalIndex maxCoarseNodes = 80;
+  int maxLevels = 10;
+  // Chebyshev smoothing of [lambda_max / eigenRatio, boost lambda_max] (Ifpack2's defaults).
+  int chebyshevDegree = 2;
+  double chebyshevEigenRatio = 30.0;
+  double chebyshevBoost = 1.1;
+  // An underestimated lambda_max makes the Chebyshev polynomial negative on the top of the
+  // spectrum and the V-cycle indefinite (CG breaks down): 10 iterations from a random start
+  // did that on the tie plate 4.1.1 (tstSmoothedAggregation), 40 are ample and cost about
+  // as much as 5 preconditioned CG iterations.
+  int powerIterations = 40;
+};
+
+namespace detail {
+
+template <class ExecutionSpaceT>
+using Matrix = belos::CrsMatrix<ExecutionSpaceT>;
+template <class ExecutionSpaceT>
+using DeviceOf = typename Matrix<ExecutionSpaceT>::device_type;
+template <class ExecutionSpaceT>
+using Vector = Kokkos::View<double*, Kokkos::LayoutLeft, DeviceOf<ExecutionSpaceT>>;
+// B(6 node + dof, mode)
+template <class ExecutionSpaceT>
+using NearNullSpace = Kokkos::View<double* [dofPerNode], Kokkos::LayoutRight, DeviceOf<ExecutionSpaceT>>;
+template <class ExecutionSpaceT>
+using KernelHandle =
+    KokkosKernels::Experimental::KokkosKernelsHandle<RowOffset, LocalIndex, double, ExecutionSpaceT,
+                                                     typename ExecutionSpaceT::memory_space,
+                                                     typename ExecutionSpaceT::memory_space>;
+
+// Rigid-body modes about the centroid of positions (the current configuration); a DOF whose
+// matrix row holds nothing but its diagonal is constrained and gets zero rows.
+template <class ExecutionSpaceT>
+void rigidBodyModes(const ExecutionSpaceT& space, const Matrix<ExecutionSpaceT>& A,
+                    const CoordinateView<typename ExecutionSpaceT::memory_space>& positions,
+                    const NearNullSpace<ExecutionSpaceT>& B) {
+  const LocalIndex numNodes = static_cast<LocalIndex>(positions.extent(0));
+  double centroid[3];
+  for (int k = 0; k < 3; ++k) {
+    double sum = 0.0;
+    Kokkos::parallel_reduce(
+        "perishell::amg::centroid", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numNodes),
+        KOKKOS_LAMBDA(const LocalIndex node, double& partial) { partial += positions(node, k); }, sum);
+    centroid[k] = numNodes > 0 ? sum / numNodes : 0.0;
+  }
+  const double cx = centroid[0], cy = centroid[1], cz = centroid[2];
+  const auto rowMap = A.graph.row_map;
+  const auto entries = A.graph.entries;
+  const auto values = A.values;
+  Kokkos::parallel_for(
+      "perishell::amg::rigid_body_modes", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, dofPerNode * numNodes),
+      KOKKOS_LAMBDA(const LocalIndex row) {
+        bool constrained = true;
+        for (RowOffset k = rowMap(row); k < rowMap(row + 1); ++k)
+          if (entries(k) != row && values(k) != 0.0) constrained = false;
+        const LocalIndex node = row / dofPerNode;
+        const int dof = row % dofPerNode;
+        const double r[3] = {positions(node, 0) - cx, positions(node, 1) - cy, positions(node, 2) - cz};
+        for (int mode = 0; mode < dofPerNode; ++mode) {
+          double value = 0.0;
+          if (mode < 3) {
+            value = dof == mode ? 1.0 : 0.0;
+          } else if (dof < 3) {
+            // (e_w x r)_dof with w = mode - 3
+            const int w = mode - 3;
+            value = (w + 1) % 3 == dof ? -r[(w + 2) % 3] : ((w + 2) % 3 == dof ? r[(w + 1) % 3] : 0.0);
+          } else {
+            value = dof == mode ? 1.0 : 0.0;
+          }
+          B(row, mode) = constrained ? 0.0 : value;
+        }
+      });
+}
+
+// Relative size below which a near-null-space column is taken as a combination of the
+// previous ones within an aggregate (its Q column and R row are zeroed).
+inline constexpr double dependentColumn = 1e-10;
+
+// Thin QR per aggregate by modified Gram-Schmidt, twice ("twice is enough"): Q goes into the
+// tentative prolongator's values (row i holds its 6 entries at 6 i .. 6 i + 5), R into the
+// coarse near-null space rows of the aggregate.
+template <class ExecutionSpaceT>
+void tentativeProlongator(const ExecutionSpaceT& space,
+                          const Kokkos::View<RowOffset*, DeviceOf<ExecutionSpaceT>>& offsets,
+                          const Kokkos::View<LocalIndex*, DeviceOf<ExecutionSpaceT>>& members,
+                          const NearNullSpace<ExecutionSpaceT>& fine, const VectorView<typename ExecutionSpaceT::memory_space>& q,
+                          const NearNullSpace<ExecutionSpaceT>& coarse) {
+  const LocalIndex numAggregates = static_cast<LocalIndex>(offsets.extent(0) - 1);
+  Kokkos::parallel_for(
+      "perishell::amg::tentative_prolongator", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numAggregates),
+      KOKKOS_LAMBDA(const LocalIndex aggregate) {
+        const RowOffset first = offsets(aggregate), last = offsets(aggregate + 1);
+        auto Q = [&](RowOffset member, int dof, int column) -> double& {
+          return q(dofPerNode * (dofPerNode * static_cast<RowOffset>(members(member)) + dof) + column);
+        };
+        double R[dofPerNode][dofPerNode] = {};
+        for (RowOffset m = first; m < last; ++m)
+          for (int d = 0; d < dofPerNode; ++d)
+            for (int j = 0; j < dofPerNode; ++j) Q(m, d, j) = fine(dofPerNode * members(m) + d, j);
+        for (int j = 0; j < dofPerNode; ++j) {
+          double initial = 0.0;
+          for (RowOffset m = first; m < last; ++m)
+            for (int d = 0; d < dofPerNode; ++d) initial += Q(m, d, j) * Q(m, d, j);
+          for (int pass = 0; pass < 2; ++pass)
+            for (int i = 0; i < j; ++i) {
+              if (R[i][i] == 0.0) continue;
+              double dot = 0.0;
+              for (RowOffset m = first; m < last; ++m)
+                for (int d = 0; d < dofPerNode; ++d) dot += Q(m, d, i) * Q(m, d, j);
+              R[i][j] += dot;
+              for (RowOffset m = first; m < last; ++m)
+                for (int d = 0; d < dofPerNode; ++d) Q(m, d, j) -= dot * Q(m, d, i);
+            }
+          double squared = 0.0;
+          for (RowOffset m = first; m < last; ++m)
+            for (int d = 0; d < dofPerNode; ++d) squared += Q(m, d, j) * Q(m, d, j);
+          const bool independent = squared > dependentColumn * dependentColumn * initial && squared > 0.0;
+          const double norm = independent ? Kokkos::Experimental::sqrt(squared) : 0.0;
+          R[j][j] = norm;
+          for (RowOffset m = first; m < last; ++m)
+            for (int d = 0; d < dofPerNode; ++d) Q(m, d, j) = independent ? Q(m, d, j) / norm : 0.0;
+        }
+        for (int i = 0; i < dofPerNode; ++i)
+          for (int j = 0; j < dofPerNode; ++j) coarse(dofPerNode * aggregate + i, j) = R[i][j];
+      });
+}
+
+// values of D^-1 A, where rows of one node share A's column pattern (nodal layout, sorted).
+template <class ExecutionSpaceT>
+void scaleByBlockInverse(const ExecutionSpaceT& space, const belos::detail::BlockInverseView<ExecutionSpaceT>& inverses,
+                         const Matrix<ExecutionSpaceT>& A, const VectorView<typename ExecutionSpaceT::memory_space>& scaled) {
+  const auto rowMap = A.graph.row_map;
+  const auto values = A.values;
+  Kokkos::parallel_for(
+      "perishell::amg::scale_by_block_inverse", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, A.numRows()),
+      KOKKOS_LAMBDA(const LocalIndex row) {
+        const LocalIndex node = row / dofPerNode;
+        const int dof = row % dofPerNode;
+        const RowOffset length = rowMap(row + 1) - rowMap(row);
+        for (RowOffset k = 0; k < length; ++k) {
+          double sum = 0.0;
+          for (int c = 0; c < dofPerNode; ++c) sum += inverses(node, dof, c) * values(rowMap(dofPerNode * node + c) + k);
+          scaled(rowMap(row) + k) = sum;
+        }
+      });
+}
+
+// Largest eigenvalue of D^-1 A by power iterations from a fixed pseudo-random start.
+template <class ExecutionSpaceT>
+double largestEigenvalue(const Matrix<ExecutionSpaceT>& scaled, int iterations) {
+  const auto n = static_cast<std::size_t>(scaled.numRows());
+  Vector<ExecutionSpaceT> x("perishell::amg::power_x", n), y("perishell::amg::power_y", n);
+  Kokkos::Random_XorShift64_Pool<ExecutionSpaceT> pool(20240611);
+  Kokkos::fill_random(x, pool, -1.0, 1.0);
+  KokkosBlas::scal(x, 1.0 / KokkosBlas::nrm2(x), x);
+  double lambda = 0.0;
+  for (int k = 0; k < iterations; ++k) {
+    KokkosSparse::spmv("N", 1.0, scaled, x, 0.0, y);
+    lambda = KokkosBlas::nrm2(y);
+    if (!(lambda > 0.0)) break;
+    KokkosBlas::scal(x, 1.0 / lambda, y);
+  }
+  return lambda;
+}
+
+// P = P_tent - omega Z, Z = D^-1 A P_tent; P shares Z's graph, and P_tent's 6 entries of row i
+// (columns 6 aggregateOf(i / 6) + j) are among Z's.
+template <class ExecutionSpaceT>
+void smoothProlongator(const ExecutionSpaceT& space, const Kokkos::View<LocalIndex*, DeviceOf<ExecutionSpaceT>>& aggregateOf,
+                       const VectorView<typename ExecutionSpaceT::memory_space>& tentative, const Matrix<ExecutionSpaceT>& Z,
+                       double omega, const VectorView<typename ExecutionSpaceT::memory_space>& smoothed) {
+  const auto rowMap = Z.graph.row_map;
+  const auto entries = Z.graph.entries;
+  const auto values = Z.values;
+  Kokkos::parallel_for(
+      "perishell::amg::smooth_prolongator", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, Z.numRows()),
+      KOKKOS_LAMBDA(const LocalIndex row) {
+        const LocalIndex aggregate = aggregateOf(row / dofPerNode);
+        for (RowOffset k = rowMap(row); k < rowMap(row + 1); ++k) {
+          const LocalIndex column = entries(k);
+          double value = -omega * values(k);
+          if (column / dofPerNode == aggregate) value += tentative(dofPerNode * static_cast<RowOffset>(row) + column % dofPerNode);
+          smoothed(k) = value;
+        }
+      });
+}
+
+// A coarse DOF whose prolongator column is zero (a dependent mode) has an all-zero row and
+// column in P^T A P; a unit diagonal decouples it without changing the coarse correction.
+template <class ExecutionSpaceT>
+void unitDiagonalOnEmptyRows(const ExecutionSpaceT& space, const Matrix<ExecutionSpaceT>& A) {
+  const auto rowMap = A.graph.row_map;
+  const auto entries = A.graph.entries;
+  const auto values = A.values;
+  Kokkos::parallel_for(
+      "perishell::amg::unit_diagonal_on_empty_rows", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, A.numRows()),
+      KOKKOS_LAMBDA(const LocalIndex row) {
+        for (RowOffset k = rowMap(row); k < rowMap(row + 1); ++k)
+          if (values(k) != 0.0) return;
+        for (RowOffset k = rowMap(row); k < rowMap(row + 1); ++k)
+          if (entries(k) == row) values(k) = 1.0;
+      });
+}
+
+// w = a w + c D^-1 r (w is not read when a is 0).
+template <class ExecutionSpaceT, class RView>
+void blockJacobiUpdate(const ExecutionSpaceT& space, const belos::detail::BlockInverseView<ExecutionSpaceT>& inverses,
+                       const RView& r, double a, const Vector<ExecutionSpaceT>& w, double c) {
+  Kokkos::parallel_for(
+      "perishell::amg::block_jacobi_update",
+      Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, static_cast<LocalIndex>(r.extent(0))),
+      KOKKOS_LAMBDA(const LocalIndex row) {
+        const LocalIndex node = row / dofPerNode;
+        const int dof = row % dofPerNode;
+        double sum = 0.0;
+        for (int j = 0; j < dofPerNode; ++j) sum += inverses(node, dof, j) * r(dofPerNode * node + j);
+        w(row) = (a == 0.0 ? 0.0 : a * w(row)) + c * sum;
+      });
+}
+
+// C = A B: symbolic (allocates C's graph) and numeric, which keeps the handle so that later
+// numeric calls reuse the symbolic work. C's rows are sorted after every numeric phase, so
+// its entry order does not depend on the spgemm algorithm.
+template <class ExecutionSpaceT>
+Matrix<ExecutionSpaceT> multiplySymbolic(KernelHandle<ExecutionSpaceT>& handle, const Matrix<ExecutionSpaceT>& A,
+                                         const Matrix<ExecutionSpaceT>& B, const std::string& label) {
+  using M = Matrix<ExecutionSpaceT>;
+  handle.create_spgemm_handle(KokkosSparse::SPGEMM_KK);
+  typename M::row_map_type::non_const_type rowMap(label + " row map", A.numRows() + 1);
+  KokkosSparse::Experimental::spgemm_symbolic(&handle, A.numRows(), B.numRows(), B.numCols(), A.graph.row_map,
+                                              A.graph.entries, false, B.graph.row_map, B.graph.entries, false, rowMap);
+  const RowOffset nnz = handle.get_spgemm_handle()->get_c_nnz();
+  typename M::index_type::non_const_type entries(label + " entries", nnz);
+  typename M::values_type::non_const_type values(label + " values", nnz);
+  return M(label, A.numRows(), B.numCols(), nnz, values, rowMap, entries);
+}
+
+template <class ExecutionSpaceT>
+void multiplyNumeric(KernelHandle<ExecutionSpaceT>& handle, const Matrix<ExecutionSpaceT>& A,
+                     const Matrix<ExecutionSpaceT>& B, const Matrix<ExecutionSpaceT>& C) {
+  KokkosSparse::Experimental::spgemm_numeric(&handle, A.numRows(), B.numRows(), B.numCols(), A.graph.row_map,
+                                             A.graph.entries, A.values, false, B.graph.row_map, B.graph.entries,
+                                             B.values, false, C.graph.row_map, C.graph.entries, C.values);
+  KokkosKernels::Impl::sort_crs_matrix(C);
+}
+
+// T = P^T into T's preallocated views (rowMap is T's row map, zeroed here), rows sorted.
+template <class ExecutionSpaceT>
+void transposeInto(const Matrix<ExecutionSpaceT>& P, const typename Matrix<ExecutionSpaceT>::row_map_type::non_const_type& rowMap,
+                   const Matrix<ExecutionSpaceT>& T) {
+  using M = Matrix<ExecutionSpaceT>;
+  using RowMap = typename M::row_map_type::non_const_type;
+  Kokkos::deep_copy(rowMap, RowOffset(0));
+  KokkosKernels::Impl::transpose_matrix<typename M::row_map_type, typename M::index_type, typename M::values_type,
+                                        RowMap, typename M::index_type::non_const_type,
+                                        typename M::values_type::non_const_type, RowMap, ExecutionSpaceT>(
+      P.numRows(), P.numCols(), P.graph.row_map, P.graph.entries, P.values, rowMap, T.graph.entries, T.values);
+  KokkosKernels::Impl::sort_crs_matrix(T);
+}
+
+}  // namespace detail
+
+template <class ExecutionSpaceT>
+class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
+  static_assert(Kokkos::is_execution_space<ExecutionSpaceT>::value,
+                "SmoothedAggregationPreconditioner needs a Kokkos execution space");
+
+ public:
+  using memory_space = typename ExecutionSpaceT::memory_space;
+  using matrix_type = belos::CrsMatrix<ExecutionSpaceT>;
+  using vector_type = detail::Vector<ExecutionSpaceT>;
+  using near_null_space_type = detail::NearNullSpace<ExecutionSpaceT>;
+  using positions_type = CoordinateView<memory_space>;
+
+  // A: symmetric, 6 DOF per node in consecutive rows, rows sorted, the rows of one node
+  // sharing one column pattern (the NodalBlockPattern layout); supports eliminated.
+  // positions: the nodes' current coordinates [m]. Builds the hierarchy (aggregation and
+  // symbolic products on the host/device once, numeric parts through update()).
+  // Throws std::invalid_argument for bad shapes, std::runtime_error for a singular nodal
+  // block or a singular coarse problem (a model free to move as a rigid body).
+  SmoothedAggregationPreconditioner(const ExecutionSpaceT& space, const matrix_type& A, const positions_type& positions,
+                                    const SmoothedAggregationOptions& options = {})
+      : space_(space), options_(options) {
+    checkInput(A, positions);
+    if (options.maxCoarseNodes < 1 || options.maxLevels < 1 || options.chebyshevDegree < 1 ||
+        options.powerIterations < 1 || !(options.chebyshevEigenRatio > 1.0))
+      throw std::invalid_argument(std::string(who) +
+                                  ": options need maxCoarseNodes, maxLevels, chebyshevDegree, powerIterations >= 1 "
+                                  "and chebyshevEigenRatio > 1");
+    levels_.emplace_back();
+    levels_[0].A = A;
+    levels_[0].nearNullSpace = near_null_space_type("perishell::amg::near_null_space_0", A.numRows());
+    detail::rigidBodyModes(space_, A, positions, levels_[0].nearNullSpace);
+    for (std::size_t l = 0;; ++l) {
+      const LocalIndex numNodes = levels_[l].A.numRows() / dofPerNode;
+      if (numNodes <= options_.maxCoarseNodes || static_cast<int>(l) + 1 >= options_.maxLevels) break;
+      const auto hostRowMap = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), levels_[l].A.graph.row_map);
+      const auto hostEntries = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), levels_[l].A.graph.entries);
+      const Aggregates aggregates = aggregateNodes(nodeGraphOf(hostRowMap, hostEntries, dofPerNode));
+      if (aggregates.numAggregates == numNodes) break;  // coarsening stalled
+      buildTransfer(l, aggregates);
+    }
+    factorCoarsest();
+  }
+
+  // Recomputes every numeric part for a new tangent A (same pattern as at construction) and
+  // new current positions: near-null space, QR, block inverses, smoothed prolongators,
+  // Galerkin products, coarse inverse. The aggregates and symbolic products are kept.
+  void update(const matrix_type& A, const positions_type& positions) {
+    checkInput(A, positions);
+    if (A.nnz() != levels_[0].A.nnz())
+      throw std::invalid_argument(std::string(who) + "::update: the matrix has " + std::to_string(A.nnz()) +
+                                  " entries, the hierarchy was built for " + std::to_string(levels_[0].A.nnz()));
+    levels_[0].A = A;
+    detail::rigidBodyModes(space_, A, positions, levels_[0].nearNullSpace);
+    for (std::size_t l = 0; l + 1 < levels_.size(); ++l) computeTransfer(l);
+    factorCoarsest();
+  }
+
+  int numLevels() const { return static_cast<int>(levels_.size()); }
+  const matrix_type& matrix(int level) const { return levels_.at(level).A; }
+  // The transfer from level + 1 to level (absent on the coarsest level).
+  const matrix_type& prolongator(int level) const { return levels_.at(level).P; }
+  const matrix_type& tentativeProlongator(int level) const { return levels_.at(level).Ptent; }
+  const near_null_space_type& nearNullSpace(int level) const { return levels_.at(level).nearNullSpace; }
+
+  void Apply(const Belos::MultiVec<double>& x, Belos::MultiVec<double>& y,
+             Belos::ETrans /*trans: the V-cycle is symmetric*/ = Belos::NOTRANS) const override {
+    constexpr const char* applyWho = "perishell::multigrid::SmoothedAggregationPreconditioner::Apply";
+    const auto& xk = belos::detail::asKokkos<ExecutionSpaceT>(x, applyWho);
+    auto& yk = belos::detail::asKokkos<ExecutionSpaceT>(y, applyWho);
+    const auto n = static_cast<std::size_t>(levels_[0].A.numRows());
+    belos::detail::checkApplyShapes(xk, yk, n, n, applyWho);
+    const auto xv = xk.deviceView();
+    const auto yv = yk.deviceView();
+    for (std::size_t j = 0; j < xv.extent(1); ++j)
+      vCycle(0, Kokkos::subview(xv, Kokkos::ALL(), j), Kokkos::subview(yv, Kokkos::ALL(), j));
+  }
+
+  bool HasApplyTranspose() const override { return true; }
+
+ private:
+  static constexpr const char* who = "perishell::multigrid::SmoothedAggregationPreconditioner";
+
+  struct Level {
+    matrix_type A;
+    near_null_space_type nearNullSpace;
+    // Smoother and transfer to the next level (absent on the coarsest level).
+    belos::detail::BlockInverseView<ExecutionSpaceT> blockInverses;
+    matrix_type scaledA;  // D^-1 A
+    double lambdaMax = 0.0;
+    Kokkos::View<RowOffset*, detail::DeviceOf<ExecutionSpaceT>> aggregateOffsets;
+    Kokkos::View<LocalIndex*, detail::DeviceOf<ExecutionSpaceT>> aggregateMembers, aggregateOf;
+    matrix_type Ptent, Z, P, R, AP;
+    typename matrix_type::row_map_type::non_const_type transposeRowMap;  // R's row map
+    std::shared_ptr<detail::KernelHandle<ExecutionSpaceT>> productZ, productAP, productCoarse;
+    vector_type x, b, r, w;  // work vectors of this level's size
+  };
+
+  void checkInput(const matrix_type& A, const positions_type& positions) const {
+    if (A.numRows() != A.numCols() || A.numRows() % dofPerNode != 0 ||
+        static_cast<std::size_t>(A.numRows()) != dofPerNode * positions.extent(0)) {
+      std::ostringstream msg;
+      msg << who << ": the matrix is " << A.numRows() << " x " << A.numCols() << " and there are "
+          << positions.extent(0) << " node positions; it needs a square matrix of 6 rows per node";
+      throw std::invalid_argument(msg.str());
+    }
+  }
+
+  // Aggregates and symbolic products of level l, then its numeric parts; appends level l + 1.
+  void buildTransfer(std::size_t l, const Aggregates& aggregates) {
+    const LocalIndex numRows = levels_[l].A.numRows();
+    const LocalIndex numCoarseRows = dofPerNode * aggregates.numAggregates;
+    const std::string tag = std::to_string(l);
+    {
+      Level& level = levels_[l];
+      level.aggregateOffsets = decltype(level.aggregateOffsets)("perishell::amg::aggregate_offsets_" + tag,
+                                                                aggregates.offsets.size());
+      level.aggregateMembers = decltype(level.aggregateMembers)("perishell::amg::aggregate_members_" + tag,
+                                                                aggregates.members.size());
+      level.aggregateOf = decltype(level.aggregateOf)("perishell::amg::aggregate_of_" + tag, aggregates.aggregateOf.size());
+      copyToDevice(aggregates.offsets, level.aggregateOffsets);
+      copyToDevice(aggregates.members, level.aggregateMembers);
+      copyToDevice(aggregates.aggregateOf, level.aggregateOf);
+
+      // P_tent: row i has the 6 columns of its node's aggregate.
+      const auto hostRowMap = Kokkos::View<RowOffset*, Kokkos::HostSpace>("ptent row map", numRows + 1);
+      const auto hostEntries =
+          Kokkos::View<LocalIndex*, Kokkos::HostSpace>("ptent entries", dofPerNode * static_cast<std::size_t>(numRows));
+      for (LocalIndex row = 0; row <= numRows; ++row) hostRowMap(row) = dofPerNode * static_cast<RowOffset>(row);
+      for (LocalIndex row = 0; row < numRows; ++row)
+        for (int j = 0; j < dofPerNode; ++j)
+          hostEntries(dofPerNode * static_cast<std::size_t>(row) + j) =
+              dofPerNode * aggregates.aggregateOf[row / dofPerNode] + j;
+      const auto rowMap = Kokkos::create_mirror_view_and_copy(memory_space(), hostRowMap);
+      const auto entries = Kokkos::create_mirror_view_and_copy(memory_space(), hostEntries);
+      typename matrix_type::values_type::non_const_type values("perishell::amg::ptent_" + tag, entries.extent(0));
+      level.Ptent = matrix_type("perishell::amg::ptent_" + tag, numRows, numCoarseRows,
+                                static_cast<RowOffset>(entries.extent(0)), values, rowMap, entries);
+      level.scaledA = matrix_type("perishell::amg::scaled_a_" + tag, numRows, numRows, level.A.nnz(),
+                                  typename matrix_type::values_type::non_const_type("perishell::amg::scaled_a_" + tag,
+                                                                                    level.A.nnz()),
+                                  level.A.graph.row_map, level.A.graph.entries);
+      level.blockInverses = belos::detail::BlockInverseView<ExecutionSpaceT>(
+          "perishell::amg::block_inverses_" + tag, numRows / dofPerNode, dofPerNode, dofPerNode);
+      level.r = vector_type("perishell::amg::r_" + tag, numRows);
+      level.w = vector_type("perishell::amg::w_" + tag, numRows);
+    }
+    levels_.emplace_back();
+    const std::string nextTag = std::to_string(l + 1);
+    levels_[l + 1].nearNullSpace = near_null_space_type("perishell::amg::near_null_space_" + nextTag, numCoarseRows);
+    levels_[l + 1].x = vector_type("perishell::amg::x_" + nextTag, numCoarseRows);
+    levels_[l + 1].b = vector_type("perishell::amg::b_" + nextTag, numCoarseRows);
+    Level& level = levels_[l];
+    computeFineNumerics(l);
+    level.productZ = std::make_shared<detail::KernelHandle<ExecutionSpaceT>>();
+    level.Z = detail::multiplySymbolic(*level.productZ, level.scaledA, level.Ptent, "perishell::amg::z_" + tag);
+    level.P = matrix_type("perishell::amg::p_" + tag, numRows, numCoarseRows, level.Z.nnz(),
+                          typename matrix_type::values_type::non_const_type("perishell::amg::p_" + tag, level.Z.nnz()),
+                          level.Z.graph.row_map, level.Z.graph.entries);
+    level.transposeRowMap = decltype(level.transposeRowMap)("perishell::amg::r_row_map_" + tag, numCoarseRows + 1);
+    level.R = matrix_type("perishell::amg::r_" + tag, numCoarseRows, numRows, level.Z.nnz(),
+                          typename matrix_type::values_type::non_const_type("perishell::amg::r_" + tag, level.Z.nnz()),
+                          level.transposeRowMap,
+                          typename matrix_type::index_type::non_const_type("perishell::amg::r_" + tag, level.Z.nnz()));
+    computeProlongator(l);
+    level.productAP = std::make_shared<detail::KernelHandle<ExecutionSpaceT>>();
+    level.AP = detail::multiplySymbolic(*level.productAP, level.A, level.P, "perishell::amg::ap_" + tag);
+    // The symbolic product R (A P) reads A P's entries, which only a numeric product fills.
+    detail::multiplyNumeric(*level.productAP, level.A, level.P, level.AP);
+    level.productCoarse = std::make_shared<detail::KernelHandle<ExecutionSpaceT>>();
+    levels_[l + 1].A = detail::multiplySymbolic(*level.productCoarse, level.R, level.AP,
+                                                "perishell::amg::a_" + nextTag);
+    computeCoarseMatrix(l);
+  }
+
+  template <class T, class DeviceView>
+  static void copyToDevice(const std::vector<T>& host, const DeviceView& device) {
+    const Kokkos::View<const T*, Kokkos::HostSpace, Kokkos::MemoryTraits<Kokkos::Unmanaged>> wrapped(host.data(), host.size());
+    Kokkos::deep_copy(device, wrapped);
+  }
+
+  void computeTransfer(std::size_t l) {
+    computeFineNumerics(l);
+    computeProlongator(l);
+    computeGalerkin(l);
+  }
+
+  // Block inverses, D^-1 A, lambda_max and the QR of the near-null space.
+  void computeFineNumerics(std::size_t l) {
+    Level& level = levels_[l];
+    level.scaledA = matrix_type("perishell::amg::scaled_a", level.A.numRows(), level.A.numRows(), level.A.nnz(),
+                                level.scaledA.values, level.A.graph.row_map, level.A.graph.entries);
+    const belos::detail::BlockDiagnosisView<ExecutionSpaceT> diagnoses("perishell::amg::block_diagnoses",
+                                                                       level.blockInverses.extent(0));
+    const LocalIndex failed = belos::detail::invertDiagonalBlocks(level.A, dofPerNode, level.blockInverses, diagnoses);
+    if (failed >= 0)
+      belos::detail::throwFailedBlock<ExecutionSpaceT>(std::string(who) + " (level " + std::to_string(l) + ")", failed,
+                                                       dofPerNode, diagnoses);
+    detail::scaleByBlockInverse(space_, level.blockInverses, level.A, level.scaledA.values);
+    space_.fence();
+    level.lambdaMax = detail::largestEigenvalue(level.scaledA, options_.powerIterations);
+    if (!(level.lambdaMax > 0.0) || !std::isfinite(level.lambdaMax))
+      throw std::runtime_error(std::string(who) + ": level " + std::to_string(l) +
+                               ": the largest eigenvalue of D^-1 A is " + std::to_string(level.lambdaMax) +
+                               " (a zero or non-finite matrix?)");
+    detail::tentativeProlongator(space_, level.aggregateOffsets, level.aggregateMembers, level.nearNullSpace,
+                                 level.Ptent.values, levels_[l + 1].nearNullSpace);
+  }
+
+  // Z = D^-1 A P_tent, P = P_tent - omega Z, R = P^T.
+  void computeProlongator(std::size_t l) {
+    Level& level = levels_[l];
+    detail::multiplyNumeric(*level.productZ, level.scaledA, level.Ptent, level.Z);
+    const double omega = 4.0 / (3.0 * level.lambdaMax);
+    detail::smoothProlongator(space_, level.aggregateOf, level.Ptent.values, level.Z, omega, level.P.values);
+    space_.fence();
+    detail::transposeInto(level.P, level.transposeRowMap, level.R);
+  }
+
+  // A_{l+1} = R (A P).
+  void computeGalerkin(std::size_t l) {
+    detail::multiplyNumeric(*levels_[l].productAP, levels_[l].A, levels_[l].P, levels_[l].AP);
+    computeCoarseMatrix(l);
+  }
+
+  void computeCoarseMatrix(std::size_t l) {
+    Level& level = levels_[l];
+    detail::multiplyNumeric(*level.productCoarse, level.R, level.AP, levels_[l + 1].A);
+    detail::unitDiagonalOnEmptyRows(space_, levels_[l + 1].A);
+    space_.fence();
+  }
+
+  // Dense inverse of the coarsest matrix, computed on the host with Eigen (a few hundred DOF)
+  // after symmetric diagonal scaling, so the singularity test does not depend on units.
+  void factorCoarsest() {
+    const matrix_type& A = levels_.back().A;
+    const auto n = static_cast<Eigen::Index>(A.numRows());
+    const auto rowMap = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), A.graph.row_map);
+    const auto entries = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), A.graph.entries);
+    const auto values = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), A.values);
+    Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(n, n);
+    for (Eigen::Index row = 0; row < n; ++row)
+      for (RowOffset k = rowMap(row); k < rowMap(row + 1); ++k) dense(row, entries(k)) += values(k);
+    if (!dense.allFinite())
+      throw std::runtime_error(std::string(who) + ": the coarse matrix (level " + std::to_string(levels_.size() - 1) +
+                               ") has NaN or Inf entries");
+    Eigen::VectorXd scale(n);
+    for (Eigen::Index i = 0; i < n; ++i) scale(i) = dense(i, i) > 0.0 ? 1.0 / std::sqrt(dense(i, i)) : 1.0;
+    const Eigen::MatrixXd scaled = scale.asDiagonal() * dense * scale.asDiagonal();
+    const Eigen::LLT<Eigen::MatrixXd> cholesky(0.5 * (scaled + scaled.transpose()));
+    const double rcond = cholesky.info() == Eigen::Success ? cholesky.rcond() : 0.0;
+    if (!(rcond > belos::detail::singularPivot)) {
+      std::ostringstream msg;
+      msg << who << ": the coarse problem (level " << levels_.size() - 1 << ", " << n
+          << " DOF) is singular or indefinite (reciprocal condition estimate " << rcond
+          << " after diagonal scaling): the model is free to move as a rigid body or is a mechanism; check the "
+             "supports";
+      throw std::runtime_error(msg.str());
+    }
+    Eigen::MatrixXd inverse = scale.asDiagonal() * cholesky.solve(Eigen::MatrixXd::Identity(n, n)) * scale.asDiagonal();
+    inverse = 0.5 * (inverse + inverse.transpose()).eval();
+    if (coarseInverse_.extent(0) != static_cast<std::size_t>(n))
+      coarseInverse_ = decltype(coarseInverse_)("perishell::amg::coarse_inverse", n, n);
+    const auto host = Kokkos::create_mirror_view(coarseInverse_);
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (Eigen::Index j = 0; j < n; ++j) host(i, j) = inverse(i, j);
+    Kokkos::deep_copy(coarseInverse_, host);
+  }
+
+  // Chebyshev iteration for A x = b scaled by D^-1 (Ifpack2's Chebyshev: Saad, Iterative
+  // Methods, alg. 12.1), from x = 0 when xIsZero.
+  template <class BView, class XView>
+  void chebyshev(const Level& level, const BView& b, const XView& x, bool xIsZero) const {
+    const double lambdaMax = options_.chebyshevBoost * level.lambdaMax;
+    const double lambdaMin = level.lambdaMax / options_.chebyshevEigenRatio;
+    const double theta = 0.5 * (lambdaMax + lambdaMin), delta = 0.5 * (lambdaMax - lambdaMin);
+    const double s1 = theta / delta;
+    double rho = 1.0 / s1;
+    if (xIsZero) {
+      detail::blockJacobiUpdate(space_, level.blockInverses, b, 0.0, level.w, 1.0 / theta);
+      Kokkos::deep_copy(x, level.w);
+    } else {
+      residual(level, b, x);
+      detail::blockJacobiUpdate(space_, level.blockInverses, level.r, 0.0, level.w, 1.0 / theta);
+      KokkosBlas::axpy(1.0, level.w, x);
+    }
+    for (int k = 1; k < options_.chebyshevDegree; ++k) {
+      const double rhoNext = 1.0 / (2.0 * s1 - rho);
+      residual(level, b, x);
+      detail::blockJacobiUpdate(space_, level.blockInverses, level.r, rhoNext * rho, level.w, 2.0 * rhoNext / delta);
+      rho = rhoNext;
+      KokkosBlas::axpy(1.0, level.w, x);
+    }
+  }
+
+  // level.r = b - A x
+  template <class BView, class XView>
+  void residual(const Level& level, const BView& b, const XView& x) const {
+    Kokkos::deep_copy(level.r, b);
+    KokkosSparse::spmv("N", -1.0, level.A, x, 1.0, level.r);
+  }
+
+  template <class BView, class XView>
+  void vCycle(std::size_t l, const BView& b, const XView& x) const {
+    if (l + 1 == levels_.size()) {
+      KokkosBlas::gemv("N", 1.0, coarseInverse_, b, 0.0, x);
+      return;
+    }
+    const Level& level = levels_[l];
+    const Level& next = levels_[l + 1];
+    chebyshev(level, b, x, true);
+    residual(level, b, x);
+    KokkosSparse::spmv("N", 1.0, level.R, level.r, 0.0, next.b);
+    vCycle(l + 1, next.b, next.x);
+    KokkosSparse::spmv("N", 1.0, level.P, next.x, 1.0, x);
+    chebyshev(level, b, x, false);
+  }
+
+  ExecutionSpaceT space_;
+  SmoothedAggregationOptions options_;
+  std::vector<Level> levels_;
+  Kokkos::View<double**, Kokkos::LayoutLeft, detail::DeviceOf<ExecutionSpaceT>> coarseInverse_;
+};
+
+}  // namespace perishell::multigrid

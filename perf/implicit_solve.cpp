@@ -1,0 +1,154 @@
+// Cost of the implicit path (model.md §6, paper §3.2.1 and Table 4) on the build's default
+// execution space, for the pressed plate of example 4.2.1 (90 x 30 x 0.8 mm, left edge
+// clamped, 1 MPa pressure; model.md §7) at several grid spacings, CCM-only and 100 % PD:
+// - assembly: one tangent (shell elements or bonds into the 6x6-block CRS matrix by
+//   atomic_add), median over repeats;
+// - the first load increment (1 % of the pressure, as the deck's 100 increments): Newton
+//   iterations, and per linear solve the preconditioner set-up, the PCG time and iterations.
+// The paper's Table 4 timed one linear solve of its 50 % PD model: 163 s (259,200 DOF),
+// 347 s (1,036,800 DOF) and 11,329 s (6,480,000 DOF) on its GPU; its "DOF" are elements x 24
+// (model.md §7), printed beside the true number of free DOF.
+//
+// Usage: perishell_perf_implicit_solve [--csv] [--repeats R] [--preconditioner NAME]
+//                                      [--models ccm,pd] [spacing_mm...]
+//   defaults: 5 repeats, preconditioner amg, models ccm and pd, spacings 0.5 0.25 0.1 mm
+//   OpenMP: OMP_NUM_THREADS=2 OMP_PROC_BIND=false ./perishell_perf_implicit_solve 1 0.5
+#include <perishell/io/deck.hpp>
+#include <perishell/solvers/implicit/static_solver_from_model.hpp>
+
+#include "median_seconds.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace {
+
+using ExecutionSpace = perishell::ExecutionSpace;
+
+struct Options {
+  bool csv = false;
+  int repeats = 5;
+  std::string preconditioner = "amg";
+  std::vector<std::string> models{"ccm", "pd"};
+  std::vector<double> spacingsMm{0.5, 0.25, 0.1};
+};
+
+[[noreturn]] void usage(const char* program, const std::string& problem) {
+  std::fprintf(stderr,
+               "error: %s\nusage: %s [--csv] [--repeats R] [--preconditioner none|jacobi|block-jacobi|amg] "
+               "[--models ccm,pd] [spacing_mm...]\n",
+               problem.c_str(), program);
+  std::exit(2);
+}
+
+Options parseArguments(int argc, char* argv[]) {
+  Options options;
+  std::vector<double> spacings;
+  for (int a = 1; a < argc; ++a) {
+    const std::string argument = argv[a];
+    const bool hasValue = a + 1 < argc;
+    if (argument == "--csv") {
+      options.csv = true;
+    } else if (argument == "--repeats" && hasValue) {
+      options.repeats = std::max(1, std::atoi(argv[++a]));
+    } else if (argument == "--preconditioner" && hasValue) {
+      options.preconditioner = argv[++a];
+    } else if (argument == "--models" && hasValue) {
+      options.models.clear();
+      std::string list = argv[++a];
+      for (std::size_t start = 0; start <= list.size();) {
+        const auto comma = std::min(list.find(',', start), list.size());
+        const std::string model = list.substr(start, comma - start);
+        if (model != "ccm" && model != "pd") usage(argv[0], "unknown model '" + model + "' (ccm or pd)");
+        options.models.push_back(model);
+        start = comma + 1;
+      }
+    } else {
+      char* end = nullptr;
+      const double value = std::strtod(argv[a], &end);
+      if (end == argv[a] || *end != '\0' || !(value > 0.0)) usage(argv[0], "'" + argument + "' is not a spacing in mm");
+      spacings.push_back(value);
+    }
+  }
+  if (!spacings.empty()) options.spacingsMm = spacings;
+  return options;
+}
+
+// The deck of example 4.2.1 with the whole plate CCM or PD (model.md §7).
+perishell::model::Model pressedPlate(double spacing, const std::string& zone, const std::string& preconditioner) {
+  const std::string text = R"(perishell:
+  version: 1
+  mesh: {generator: plate, length-x: 0.090, length-y: 0.030, spacing: )" +
+                           std::to_string(spacing) + R"(}
+  material: {young-modulus: 210.0e9, poisson-ratio: 0.33, density: 2440.0, thickness: 0.8e-3}
+  zones: {default: )" + zone + R"(}
+  supports: {clamp: {set: left, dofs: [ux, uy, uz, rx, ry, rz]}}
+  loads: {pressure: {type: pressure, value: 1.0e6}}
+  solver: {type: implicit, increments: 100, max-iterations: 100, tolerance: 1.0e-8, preconditioner: )" +
+                           preconditioner + R"(}
+)";
+  return perishell::model::buildModel(perishell::parseDeck(text, "pressed_plate.yaml"));
+}
+
+// The paper's GPU time for one linear solve (Table 4) at its DOF count, or 0 where it has none.
+double paperSolveSeconds(long long paperDof) {
+  if (paperDof == 259200) return 163.0;
+  if (paperDof == 1036800) return 347.0;
+  if (paperDof == 6480000) return 11329.0;
+  return 0.0;
+}
+
+}  // namespace
+
+int main(int argc, char* argv[]) {
+  Kokkos::ScopeGuard kokkos(argc, argv);
+  const Options options = parseArguments(argc, argv);
+  if (options.csv) {
+    std::printf("backend,model,spacing_mm,nodes,elements,paper_dof,free_dof,bonds,preconditioner,assembly_s,"
+                "newton_iterations,linear_iterations_per_solve,setup_s_per_solve,solve_s_per_solve,"
+                "tip_deflection_m,paper_solve_s\n");
+  } else {
+    std::printf("# implicit pressed plate 4.2.1 on %s (concurrency %d), first increment (1 %% of 1 MPa), "
+                "assembly median of %d\n",
+                ExecutionSpace::name(), ExecutionSpace::concurrency(), options.repeats);
+    std::printf("%5s %8s %9s %9s %10s %10s %10s %12s %7s %9s %10s %10s %12s %10s\n", "model", "dx[mm]", "nodes",
+                "elements", "paper DOF", "free DOF", "bonds", "assembly[s]", "Newton", "PCG/solve", "setup[s]",
+                "solve[s]", "tip w [m]", "paper [s]");
+  }
+  for (const auto& zone : options.models)
+    for (const double spacingMm : options.spacingsMm) {
+      const auto model = pressedPlate(spacingMm * 1e-3, zone, options.preconditioner);
+      auto solver = perishell::solvers::makeStaticSolver(ExecutionSpace{}, model);
+      const double assemblySeconds = perishell::perf::medianSeconds(options.repeats, [&] { solver.assembleTangent(); });
+      const auto report = solver.advanceTo(0.01);
+      const auto u = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.kinematics().displacements);
+      double tip = 0.0;
+      for (const auto node : model.shell.sets.nodeSet("right")) tip = std::max(tip, std::abs(u(node, 2)));
+      const long long elements = model.shell.mesh.numElements();
+      const long long paperDof = 24 * elements;
+      long long freeDof = 0;
+      const auto& supports = model.shell.sets.nodeSet("left");
+      freeDof = 6LL * model.shell.mesh.numNodes() - 6LL * static_cast<long long>(supports.size());
+      const double solves = std::max(1, report.newtonIterations);
+      const double paper = paperSolveSeconds(paperDof);
+      if (options.csv) {
+        std::printf("%s,%s,%g,%d,%lld,%lld,%lld,%d,%s,%.6e,%d,%.1f,%.6e,%.6e,%.6e,%g\n", ExecutionSpace::name(),
+                    zone.c_str(), spacingMm, model.shell.mesh.numNodes(), elements, paperDof, freeDof,
+                    static_cast<int>(solver.numBonds()), options.preconditioner.c_str(), assemblySeconds,
+                    report.newtonIterations, report.linearIterations / solves, report.seconds.preconditioner / solves,
+                    report.seconds.linearSolve / solves, tip, paper);
+      } else {
+        std::printf("%5s %8.3g %9d %9lld %10lld %10lld %10d %12.4f %7d %9.1f %10.4f %10.4f %12.6e %10s\n",
+                    zone.c_str(), spacingMm, model.shell.mesh.numNodes(), elements, paperDof, freeDof,
+                    static_cast<int>(solver.numBonds()), assemblySeconds, report.newtonIterations,
+                    report.linearIterations / solves, report.seconds.preconditioner / solves,
+                    report.seconds.linearSolve / solves, tip,
+                    paper > 0.0 ? std::to_string(static_cast<int>(paper)).c_str() : "-");
+      }
+      std::fflush(stdout);
+    }
+  return 0;
+}

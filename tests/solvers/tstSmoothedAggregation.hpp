@@ -1,0 +1,348 @@
+// Smoothed-aggregation multigrid (solvers/multigrid/smoothed_aggregation.hpp) on thin shell
+// and 100 % PD plate tangents: the tentative prolongator reproduces the near-null space, the
+// V-cycle is symmetric, PCG with it matches block-Jacobi PCG in far fewer iterations that
+// barely grow under mesh refinement, Newton with it matches Newton with block Jacobi, and a
+// model free to move gives a clear error.
+#include <perishell/io/deck.hpp>
+#include <perishell/solvers/implicit/static_solver_from_model.hpp>
+#include <perishell/solvers/multigrid/smoothed_aggregation.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace perishell_test_smoothed_aggregation {
+
+using Exec = TEST_EXECSPACE;
+using Memory = Exec::memory_space;
+using Matrix = perishell::belos::CrsMatrix<Exec>;
+using Amg = perishell::multigrid::SmoothedAggregationPreconditioner<Exec>;
+using perishell::LocalIndex;
+using perishell::RowOffset;
+
+// A square plate, 1 m wide and thin (t/a = 1/200), n x n elements, under uniform pressure.
+perishell::model::Model plateModel(int elements, const std::string& zone, const std::string& supports,
+                                   const std::string& solver = "increments: 1, tolerance: 1.0e-6") {
+  const std::string text = R"(perishell:
+  version: 1
+  mesh:
+    generator: plate
+    length-x: 1.0
+    length-y: 1.0
+    spacing: )" + std::to_string(1.0 / elements) + R"(
+    node-sets:
+      origin: {box: {min: [-0.001, -0.001, -0.001], max: [0.001, 0.001, 0.001]}}
+      corner-x: {box: {min: [0.999, -0.001, -0.001], max: [1.001, 0.001, 0.001]}}
+  material: {young-modulus: 70.0e9, poisson-ratio: 0.3, density: 2700.0, thickness: 0.005}
+  zones: {default: )" + zone + R"(}
+  supports: )" + supports + R"(
+  loads: {pressure: {type: pressure, value: 1000.0}}
+  solver: {type: implicit, )" + solver + R"(}
+)";
+  return perishell::model::buildModel(perishell::parseDeck(text, "plate.yaml"));
+}
+
+// Simply supported edges; in-plane rigid motion removed at two corners.
+const std::string simplySupported =
+    "{bottom: {set: bottom, dofs: [uz]}, right: {set: right, dofs: [uz]}, top: {set: top, dofs: [uz]}, "
+    "left: {set: left, dofs: [uz]}, pin: {set: origin, dofs: [ux, uy]}, roller: {set: corner-x, dofs: [uy]}}";
+// Only w held along one edge: free to slide in plane and to turn about that edge.
+const std::string hingedOnly = "{left: {set: left, dofs: [uz]}}";
+
+struct PlateSystem {
+  Matrix A;
+  perishell::VectorView<Memory> rhs;
+  perishell::CoordinateView<Memory> positions;
+};
+
+// The tangent at the undeformed state with the supports eliminated, as the Newton solver
+// assembles it, and the pressure load as right-hand side.
+PlateSystem assemblePlate(const perishell::model::Model& model) {
+  const Exec space;
+  const auto& mesh = model.shell.mesh;
+  const LocalIndex numNodes = mesh.numNodes();
+  const auto& material = model.deck.material;
+  perishell::pd::PdKinematics<Memory> state(numNodes);
+  perishell::QuadConnectivityView<Memory> noQuads("no quads", 0);
+  Kokkos::View<LocalIndex* [2], Kokkos::LayoutRight, Memory> noBonds("no bonds", 0);
+  PlateSystem system;
+  system.positions = Kokkos::create_mirror_view_and_copy(Memory{}, mesh.coordinates);
+  perishell::VectorView<Memory> values;
+  Kokkos::View<RowOffset*, Memory> rowMap;
+  Kokkos::View<LocalIndex*, Memory> columns;
+  if (model.numPdElements == 0) {
+    std::vector<LocalIndex> elements(mesh.numElements());
+    for (LocalIndex e = 0; e < mesh.numElements(); ++e) elements[e] = e;
+    perishell::shell::ShellSection section;
+    section.youngModulus = material.youngModulus;
+    section.poissonRatio = material.poissonRatio;
+    section.thickness = material.thickness;
+    const auto body = perishell::shell::makeShellBody(space, mesh, elements, section);
+    const auto pattern = perishell::assembly::buildNodalBlockPattern(space, numNodes, body.quads, noBonds);
+    values = perishell::VectorView<Memory>("values", pattern.numEntries());
+    perishell::shell::assembleShellTangent(space, body, state, pattern, values);
+    system.A = Matrix("plate", 6 * numNodes, 6 * numNodes, pattern.numEntries(), values, pattern.rowMap, pattern.columns);
+    rowMap = pattern.rowMap;
+    columns = pattern.columns;
+  } else {
+    const auto body = perishell::pd::makePdBody(
+        space, mesh, model.pdNodes,
+        {material.youngModulus, material.poissonRatio, material.thickness, material.fractureEnergy}, model.horizon(),
+        model.gridSpacing(), model.preCrackSegments());
+    const auto pattern = perishell::assembly::buildNodalBlockPattern(space, numNodes, noQuads,
+                                                                     perishell::solvers::bondEndNodes(space, body.bonds));
+    values = perishell::VectorView<Memory>("values", pattern.numEntries());
+    const auto intact = perishell::pd::makeIntactFlags(body.bonds, "intact");
+    perishell::pd::assembleBondTangent(space, body, state, intact, pattern, values);
+    system.A = Matrix("plate", 6 * numNodes, 6 * numNodes, pattern.numEntries(), values, pattern.rowMap, pattern.columns);
+    rowMap = pattern.rowMap;
+    columns = pattern.columns;
+  }
+  const auto actions = perishell::solvers::makeExternalActions<Memory>(model);
+  const auto hostLoads = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions.loadPatterns);
+  const auto hostMasks = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions.constrainedDofs);
+  Kokkos::View<double*, Kokkos::HostSpace> rhs("rhs", 6 * numNodes);
+  Kokkos::View<bool*, Kokkos::HostSpace> constrained("constrained", 6 * numNodes);
+  for (LocalIndex node = 0; node < numNodes; ++node)
+    for (int d = 0; d < 6; ++d) {
+      rhs(6 * node + d) = hostLoads(node, d);
+      constrained(6 * node + d) = (hostMasks(node) >> d) & 1u;
+    }
+  system.rhs = Kokkos::create_mirror_view_and_copy(Memory{}, rhs);
+  const Kokkos::View<const bool*, Memory> flags = Kokkos::create_mirror_view_and_copy(Memory{}, constrained);
+  const Kokkos::View<const double*, Memory> zeros = perishell::VectorView<Memory>("zeros", 6 * numNodes);
+  perishell::assembly::eliminateDirichlet(space, rowMap, columns, values, system.rhs, flags, zeros);
+  space.fence();
+  return system;
+}
+
+struct Solve {
+  perishell::belos::CgResult result;
+  std::vector<double> x;
+};
+
+Solve solve(const PlateSystem& system, const Teuchos::RCP<const Belos::Operator<double>>& preconditioner,
+            double tolerance) {
+  perishell::belos::CgOptions options;
+  options.tolerance = tolerance;
+  options.maxIterations = 50000;
+  options.fallbackOnBreakdown = false;
+  perishell::VectorView<Memory> x("x", system.rhs.extent(0));
+  Solve out;
+  out.result = perishell::belos::solveCg<Exec>(system.A, system.rhs, x, options, preconditioner);
+  const auto host = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, x);
+  out.x.assign(host.data(), host.data() + host.extent(0));
+  return out;
+}
+
+Teuchos::RCP<const Belos::Operator<double>> blockJacobi(const PlateSystem& system) {
+  return Teuchos::rcp(new perishell::belos::BlockJacobiPreconditioner<Exec>(system.A, 6));
+}
+
+Teuchos::RCP<const Belos::Operator<double>> amg(const PlateSystem& system) {
+  return Teuchos::rcp(new Amg(Exec{}, system.A, system.positions));
+}
+
+// Relative difference in the norm scaled per DOF kind (translations and rotations differ in units).
+double relativeDifference(const std::vector<double>& x, const std::vector<double>& reference) {
+  double worst = 0.0;
+  for (int kind = 0; kind < 2; ++kind) {
+    double difference = 0.0, norm = 0.0;
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if ((i % 6 < 3) == (kind == 0)) {
+        difference += (x[i] - reference[i]) * (x[i] - reference[i]);
+        norm += reference[i] * reference[i];
+      }
+    worst = std::max(worst, std::sqrt(difference / norm));
+  }
+  return worst;
+}
+
+int amgIterations(const std::string& zone, int elements) {
+  const auto system = assemblePlate(plateModel(elements, zone, simplySupported));
+  const auto amgSolve = solve(system, amg(system), 1e-8);
+  EXPECT_TRUE(amgSolve.result.converged);
+  std::printf("%s plate %dx%d: AMG PCG %d iterations\n", zone.c_str(), elements, elements, amgSolve.result.iterations);
+  return amgSolve.result.iterations;
+}
+
+// PCG with AMG against PCG with block Jacobi on the same plate; returns the iteration ratio.
+double compareWithBlockJacobi(const std::string& zone, int elements) {
+  const auto system = assemblePlate(plateModel(elements, zone, simplySupported));
+  const auto reference = solve(system, blockJacobi(system), 1e-12);
+  const auto amgSolve = solve(system, amg(system), 1e-8);
+  const auto amgTight = solve(system, amg(system), 1e-12);
+  std::printf("%s plate %dx%d: block-Jacobi %d iterations (1e-12), AMG %d (1e-8), %d (1e-12), difference %.2e\n",
+              zone.c_str(), elements, elements, reference.result.iterations, amgSolve.result.iterations,
+              amgTight.result.iterations, relativeDifference(amgTight.x, reference.x));
+  EXPECT_TRUE(reference.result.converged);
+  EXPECT_TRUE(amgSolve.result.converged);
+  EXPECT_TRUE(amgTight.result.converged);
+  EXPECT_LT(relativeDifference(amgTight.x, reference.x), 1e-6);
+  EXPECT_LT(relativeDifference(amgSolve.x, reference.x), 1e-4);
+  return double(reference.result.iterations) / amgTight.result.iterations;
+}
+
+// Largest |P_tent B_{l+1} - B_l| over max |B_l|, on the host.
+double nearNullReproduction(const Amg& hierarchy, int level) {
+  const auto& P = hierarchy.tentativeProlongator(level);
+  const auto rowMap = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, P.graph.row_map);
+  const auto entries = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, P.graph.entries);
+  const auto values = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, P.values);
+  const auto fine = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, hierarchy.nearNullSpace(level));
+  const auto coarse = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, hierarchy.nearNullSpace(level + 1));
+  double worst = 0.0, scale = 0.0;
+  for (LocalIndex row = 0; row < P.numRows(); ++row)
+    for (int mode = 0; mode < 6; ++mode) {
+      double sum = 0.0;
+      for (RowOffset k = rowMap(row); k < rowMap(row + 1); ++k) sum += values(k) * coarse(entries(k), mode);
+      worst = std::max(worst, std::abs(sum - fine(row, mode)));
+      scale = std::max(scale, std::abs(fine(row, mode)));
+    }
+  return worst / scale;
+}
+
+}  // namespace perishell_test_smoothed_aggregation
+
+TEST(TEST_CATEGORY, smoothed_aggregation_tentative_prolongator_reproduces_rigid_body_modes) {
+  using namespace perishell_test_smoothed_aggregation;
+  const auto system = assemblePlate(plateModel(32, "ccm", simplySupported));
+  const Amg hierarchy(Exec{}, system.A, system.positions);
+  std::printf("levels: %d, rows:", hierarchy.numLevels());
+  for (int l = 0; l < hierarchy.numLevels(); ++l) std::printf(" %d", hierarchy.matrix(l).numRows());
+  std::printf("\n");
+  ASSERT_GE(hierarchy.numLevels(), 3);
+  for (int l = 0; l + 1 < hierarchy.numLevels(); ++l) {
+    const double error = nearNullReproduction(hierarchy, l);
+    std::printf("level %d: |P_tent B_c - B| / |B| = %.2e\n", l, error);
+    EXPECT_LT(error, 1e-12) << "level " << l;
+  }
+  // Constrained DOF (w on the edges) carry no mode: the fine near-null space is zero there.
+  const auto fine = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, hierarchy.nearNullSpace(0));
+  for (int mode = 0; mode < 6; ++mode) EXPECT_EQ(fine(6 * 0 + 2, mode), 0.0);  // node 0 is a corner
+}
+
+TEST(TEST_CATEGORY, smoothed_aggregation_v_cycle_is_symmetric) {
+  using namespace perishell_test_smoothed_aggregation;
+  const auto system = assemblePlate(plateModel(32, "ccm", simplySupported));
+  const Amg hierarchy(Exec{}, system.A, system.positions);
+  using MV = perishell::belos::KokkosMultiVector<Exec>;
+  const int n = system.A.numRows();
+  MV x("x", n, 2), y("y", n, 2), Mx("Mx", n, 2), My("My", n, 2);
+  x.MvRandom();
+  y.MvRandom();
+  hierarchy.Apply(x, Mx);
+  hierarchy.Apply(y, My);
+  std::vector<double> MxDotY(2), xDotMy(2), MxNorm(2), yNorm(2);
+  Mx.MvDot(y, MxDotY);
+  x.MvDot(My, xDotMy);
+  Mx.MvNorm(MxNorm);
+  y.MvNorm(yNorm);
+  for (int j = 0; j < 2; ++j) {
+    const double asymmetry = std::abs(MxDotY[j] - xDotMy[j]) / (MxNorm[j] * yNorm[j]);
+    std::printf("column %d: <Mx, y> %.15e, <x, My> %.15e, relative %.2e\n", j, MxDotY[j], xDotMy[j], asymmetry);
+    EXPECT_LT(asymmetry, 1e-12);
+    EXPECT_GT(std::abs(MxDotY[j]), 0.0);
+  }
+}
+
+TEST(TEST_CATEGORY, smoothed_aggregation_pcg_matches_block_jacobi_on_thin_shell_plate) {
+  using namespace perishell_test_smoothed_aggregation;
+  // Measured: block Jacobi 754 iterations, AMG 115 (both to 1e-12), a ratio of 6.6.
+  const double ratio = compareWithBlockJacobi("ccm", 32);
+  EXPECT_GT(ratio, 5.0);
+}
+
+TEST(TEST_CATEGORY, smoothed_aggregation_iterations_are_mesh_independent_shell) {
+  using namespace perishell_test_smoothed_aggregation;
+  const int coarse = amgIterations("ccm", 16);
+  amgIterations("ccm", 32);
+  const int fine = amgIterations("ccm", 64);
+  // Measured 100, 87, 43 iterations to 1e-8: they do not grow with refinement.
+  EXPECT_LE(fine, 1.5 * coarse);
+}
+
+TEST(TEST_CATEGORY, smoothed_aggregation_pcg_matches_block_jacobi_on_pd_plate) {
+  using namespace perishell_test_smoothed_aggregation;
+  // The PD tangent (horizon 3 dx) is far better conditioned than the shell's: block Jacobi
+  // needs 72 iterations here, AMG 33 (measured); phase-1 aggregates of a whole horizon are
+  // coarse, so the gain is smaller than for shells.
+  const double ratio = compareWithBlockJacobi("pd", 24);
+  EXPECT_GT(ratio, 1.5);
+}
+
+TEST(TEST_CATEGORY, smoothed_aggregation_iterations_are_mesh_independent_pd) {
+  using namespace perishell_test_smoothed_aggregation;
+  const int coarse = amgIterations("pd", 12);
+  amgIterations("pd", 24);
+  const int fine = amgIterations("pd", 48);
+  // Measured 16, 24, 47: not yet mesh independent for PD (see the report); this bounds it.
+  EXPECT_LE(fine, 3.5 * coarse);
+}
+
+TEST(TEST_CATEGORY, smoothed_aggregation_newton_matches_block_jacobi) {
+  using namespace perishell_test_smoothed_aggregation;
+  std::vector<double> centre;
+  for (const std::string preconditioner : {"block-jacobi", "amg"}) {
+    const auto model =
+        plateModel(16, "ccm", simplySupported, "increments: 2, tolerance: 1.0e-7, preconditioner: " + preconditioner);
+    auto solver = perishell::solvers::makeStaticSolver(Exec{}, model);
+    const auto report = solver.advanceTo(1.0);
+    const auto u = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.kinematics().displacements);
+    const auto& x = model.shell.mesh.coordinates;
+    for (LocalIndex node = 0; node < model.shell.mesh.numNodes(); ++node)
+      if (std::abs(x(node, 0) - 0.5) < 1e-9 && std::abs(x(node, 1) - 0.5) < 1e-9) centre.push_back(u(node, 2));
+    std::printf("Newton with %s: w_centre %.10e m, %d Newton, %lld linear iterations\n", preconditioner.c_str(),
+                centre.back(), report.newtonIterations, report.linearIterations);
+  }
+  ASSERT_EQ(centre.size(), 2u);
+  EXPECT_NEAR(centre[1], centre[0], 1e-5 * std::abs(centre[0]));
+}
+
+TEST(TEST_CATEGORY, smoothed_aggregation_rejects_a_singular_coarse_problem) {
+  using namespace perishell_test_smoothed_aggregation;
+  const auto system = assemblePlate(plateModel(16, "ccm", hingedOnly));
+  try {
+    const Amg hierarchy(Exec{}, system.A, system.positions);
+    FAIL() << "a plate free to slide built a hierarchy";
+  } catch (const std::runtime_error& error) {
+    const std::string message = error.what();
+    std::printf("%s\n", message.c_str());
+    EXPECT_NE(message.find("singular"), std::string::npos) << message;
+    EXPECT_NE(message.find("supports"), std::string::npos) << message;
+  }
+}
+
+namespace perishell_test_smoothed_aggregation {
+
+// The paper's tie plate 4.1.1 (model.md §7), CCM-only: 90 x 30 x 0.8 mm, left edge clamped,
+// in-plane traction on the right edge; dx 1 mm.
+perishell::model::Model tiePlate() {
+  const std::string text = R"(perishell:
+  version: 1
+  mesh: {generator: plate, length-x: 0.090, length-y: 0.030, spacing: 1.0e-3}
+  material: {young-modulus: 210.0e9, poisson-ratio: 0.33, density: 2440.0, thickness: 0.8e-3}
+  zones: {default: ccm}
+  supports: {clamp: {set: left, dofs: [ux, uy, uz, rx, ry, rz]}}
+  loads: {pull: {type: edge-traction, set: right, value: 1.0e6}}
+  solver: {type: implicit, increments: 1}
+)";
+  return perishell::model::buildModel(perishell::parseDeck(text, "tie_plate.yaml"));
+}
+
+}  // namespace perishell_test_smoothed_aggregation
+
+// In-plane loading of a clamped thin plate: with 10 power iterations the lambda_max estimate
+// was low enough to make the V-cycle indefinite (CG broke down); the default must converge.
+TEST(TEST_CATEGORY, smoothed_aggregation_pcg_converges_on_the_tie_plate) {
+  using namespace perishell_test_smoothed_aggregation;
+  const auto system = assemblePlate(tiePlate());
+  const auto reference = solve(system, blockJacobi(system), 1e-10);
+  const auto amgSolve = solve(system, amg(system), 1e-10);
+  std::printf("tie plate 90x30: block-Jacobi %d iterations, AMG %d, difference %.2e\n", reference.result.iterations,
+              amgSolve.result.iterations, relativeDifference(amgSolve.x, reference.x));
+  EXPECT_TRUE(amgSolve.result.converged);
+  EXPECT_LT(amgSolve.result.iterations, 40);
+  EXPECT_LT(relativeDifference(amgSolve.x, reference.x), 1e-6);
+}
