@@ -129,9 +129,7 @@ int main(int argc, char* argv[]) {
       for (const auto node : model.shell.sets.nodeSet("right")) tip = std::max(tip, std::abs(u(node, 2)));
       const long long elements = model.shell.mesh.numElements();
       const long long paperDof = 24 * elements;
-      long long freeDof = 0;
-      const auto& supports = model.shell.sets.nodeSet("left");
-      freeDof = 6LL * model.shell.mesh.numNodes() - 6LL * static_cast<long long>(supports.size());
+      const long long freeDof = model.freeDofCount();
       const double solves = std::max(1, report.newtonIterations);
       const double paper = paperSolveSeconds(paperDof);
       if (options.csv) {

@@ -249,7 +249,7 @@ TEST(TEST_CATEGORY, smoothed_aggregation_v_cycle_is_symmetric) {
 
 TEST(TEST_CATEGORY, smoothed_aggregation_pcg_matches_block_jacobi_on_thin_shell_plate) {
   using namespace perishell_test_smoothed_aggregation;
-  // Measured: block Jacobi 754 iterations, AMG 115 (both to 1e-12), a ratio of 6.6.
+  // Measured: block Jacobi 754 iterations, AMG 109 (both to 1e-12), a ratio of 6.9.
   const double ratio = compareWithBlockJacobi("ccm", 32);
   EXPECT_GT(ratio, 5.0);
 }
@@ -259,14 +259,14 @@ TEST(TEST_CATEGORY, smoothed_aggregation_iterations_are_mesh_independent_shell) 
   const int coarse = amgIterations("ccm", 16);
   amgIterations("ccm", 32);
   const int fine = amgIterations("ccm", 64);
-  // Measured 100, 87, 43 iterations to 1e-8: they do not grow with refinement.
+  // Measured 99, 81, 42 iterations to 1e-8: they do not grow with refinement.
   EXPECT_LE(fine, 1.5 * coarse);
 }
 
 TEST(TEST_CATEGORY, smoothed_aggregation_pcg_matches_block_jacobi_on_pd_plate) {
   using namespace perishell_test_smoothed_aggregation;
   // The PD tangent (horizon 3 dx) is far better conditioned than the shell's: block Jacobi
-  // needs 72 iterations here, AMG 33 (measured); phase-1 aggregates of a whole horizon are
+  // needs 72 iterations here, AMG 30 (measured); phase-1 aggregates of a whole horizon are
   // coarse, so the gain is smaller than for shells.
   const double ratio = compareWithBlockJacobi("pd", 24);
   EXPECT_GT(ratio, 1.5);
@@ -277,7 +277,7 @@ TEST(TEST_CATEGORY, smoothed_aggregation_iterations_are_mesh_independent_pd) {
   const int coarse = amgIterations("pd", 12);
   amgIterations("pd", 24);
   const int fine = amgIterations("pd", 48);
-  // Measured 16, 24, 47: not yet mesh independent for PD (see the report); this bounds it.
+  // Measured 16, 22, 45: not yet mesh independent for PD (docs/implicit.md); this bounds it.
   EXPECT_LE(fine, 3.5 * coarse);
 }
 

@@ -257,3 +257,23 @@ TEST(TEST_CATEGORY, static_newton_host_and_device_agree) {
   EXPECT_GT(largest, 4.0);  // the tip has moved w ~ 4.9
   EXPECT_LT(difference, 1e-8 * largest);
 }
+
+// At a small load the round-off of the internal forces (large element forces that cancel)
+// exceeds 1e-10 |P|: Newton must then stop on the displacement increment, with a residual
+// below sqrt(tolerance), instead of failing the increment (it did before).
+TEST(TEST_CATEGORY, static_newton_converges_on_the_displacement_increment_at_round_off) {
+  using namespace perishell_test_static_newton;
+  const auto model =
+      stripModel("ccm", 0.5, 10.0, endShear, "increments: 1, max-iterations: 30, max-cuts: 0, tolerance: 1.0e-10");
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  const auto report = solver.advanceTo(0.002);
+  const auto tip = meanDisplacement(solver, model, "right");
+  std::printf("P/P_max 0.002: relative residual %.3e, on displacement %d, %d Newton iterations, tip w %.6e\n",
+              report.relativeResidual, int(report.convergedOnDisplacement), report.newtonIterations, tip[2]);
+  EXPECT_EQ(report.cuts, 0);
+  EXPECT_TRUE(report.convergedOnDisplacement);
+  EXPECT_GT(report.relativeResidual, 1e-10);
+  EXPECT_LT(report.relativeResidual, 1e-5);
+  // Linear range: w = P L^3 / (3 E I) = 0.002 * 4 * 1000 / (3 * 1.2e6 * 1/12000) = 0.02667.
+  EXPECT_NEAR(tip[2], 0.02667, 0.002 * 0.02667);
+}
