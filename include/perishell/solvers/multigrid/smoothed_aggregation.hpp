@@ -15,7 +15,8 @@
 //   P_tent B_{l+1} = B_l and coarse nodes carry 6 DOF again;
 // - P = (I - omega D^-1 A) P_tent with D the 6x6 nodal block diagonal and
 //   omega = 4 / (3 lambda_max(D^-1 A)) (power iterations);
-// - A_{l+1} = P^T A P by Kokkos Kernels spgemm (symbolic once, numeric on update()).
+// - A_{l+1} = P^T A P (sparse_product.hpp: patterns once on the host, values on the device
+//   at every update()).
 // The coarsest matrix (a few hundred DOF) is inverted densely on the host (Eigen) at setup
 // and applied on the device as a dense matrix-vector product.
 //
@@ -28,6 +29,7 @@
 #include <perishell/solvers/belos/crs_operator.hpp>
 #include <perishell/solvers/belos/kokkos_multivector.hpp>
 #include <perishell/solvers/multigrid/aggregation.hpp>
+#include <perishell/solvers/multigrid/sparse_product.hpp>
 
 #include <BelosOperator.hpp>
 #include <BelosTypes.hpp>
@@ -36,9 +38,7 @@
 #include <KokkosBlas1_nrm2.hpp>
 #include <KokkosBlas1_scal.hpp>
 #include <KokkosBlas2_gemv.hpp>
-#include <KokkosKernels_Handle.hpp>
 #include <KokkosKernels_SparseUtils.hpp>
-#include <KokkosSparse_spgemm.hpp>
 #include <KokkosSparse_spmv.hpp>
 #include <Kokkos_Core.hpp>
 #include <Kokkos_Random.hpp>
@@ -82,11 +82,6 @@ using Vector = Kokkos::View<double*, Kokkos::LayoutLeft, DeviceOf<ExecutionSpace
 // B(6 node + dof, mode)
 template <class ExecutionSpaceT>
 using NearNullSpace = Kokkos::View<double* [dofPerNode], Kokkos::LayoutRight, DeviceOf<ExecutionSpaceT>>;
-template <class ExecutionSpaceT>
-using KernelHandle =
-    KokkosKernels::Experimental::KokkosKernelsHandle<RowOffset, LocalIndex, double, ExecutionSpaceT,
-                                                     typename ExecutionSpaceT::memory_space,
-                                                     typename ExecutionSpaceT::memory_space>;
 
 // Rigid-body modes about the centroid of positions (the current configuration); a DOF whose
 // matrix row holds nothing but its diagonal is constrained and gets zero rows.
@@ -278,32 +273,6 @@ void blockJacobiUpdate(const ExecutionSpaceT& space, const belos::detail::BlockI
       });
 }
 
-// C = A B: symbolic (allocates C's graph) and numeric, which keeps the handle so that later
-// numeric calls reuse the symbolic work. C's rows are sorted after every numeric phase, so
-// its entry order does not depend on the spgemm algorithm.
-template <class ExecutionSpaceT>
-Matrix<ExecutionSpaceT> multiplySymbolic(KernelHandle<ExecutionSpaceT>& handle, const Matrix<ExecutionSpaceT>& A,
-                                         const Matrix<ExecutionSpaceT>& B, const std::string& label) {
-  using M = Matrix<ExecutionSpaceT>;
-  handle.create_spgemm_handle(KokkosSparse::SPGEMM_KK);
-  typename M::row_map_type::non_const_type rowMap(label + " row map", A.numRows() + 1);
-  KokkosSparse::Experimental::spgemm_symbolic(&handle, A.numRows(), B.numRows(), B.numCols(), A.graph.row_map,
-                                              A.graph.entries, false, B.graph.row_map, B.graph.entries, false, rowMap);
-  const RowOffset nnz = handle.get_spgemm_handle()->get_c_nnz();
-  typename M::index_type::non_const_type entries(label + " entries", nnz);
-  typename M::values_type::non_const_type values(label + " values", nnz);
-  return M(label, A.numRows(), B.numCols(), nnz, values, rowMap, entries);
-}
-
-template <class ExecutionSpaceT>
-void multiplyNumeric(KernelHandle<ExecutionSpaceT>& handle, const Matrix<ExecutionSpaceT>& A,
-                     const Matrix<ExecutionSpaceT>& B, const Matrix<ExecutionSpaceT>& C) {
-  KokkosSparse::Experimental::spgemm_numeric(&handle, A.numRows(), B.numRows(), B.numCols(), A.graph.row_map,
-                                             A.graph.entries, A.values, false, B.graph.row_map, B.graph.entries,
-                                             B.values, false, C.graph.row_map, C.graph.entries, C.values);
-  KokkosKernels::Impl::sort_crs_matrix(C);
-}
-
 // T = P^T into T's preallocated views (rowMap is T's row map, zeroed here), rows sorted.
 template <class ExecutionSpaceT>
 void transposeInto(const Matrix<ExecutionSpaceT>& P, const typename Matrix<ExecutionSpaceT>::row_map_type::non_const_type& rowMap,
@@ -335,7 +304,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
   // A: symmetric, 6 DOF per node in consecutive rows, rows sorted, the rows of one node
   // sharing one column pattern (the NodalBlockPattern layout); supports eliminated.
   // positions: the nodes' current coordinates [m]. Builds the hierarchy (aggregation and
-  // symbolic products on the host/device once, numeric parts through update()).
+  // product patterns on the host once, numeric parts on the device, again at update()).
   // Throws std::invalid_argument for bad shapes, std::runtime_error for a singular nodal
   // block or a singular coarse problem (a model free to move as a rigid body).
   SmoothedAggregationPreconditioner(const ExecutionSpaceT& space, const matrix_type& A, const positions_type& positions,
@@ -365,7 +334,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
 
   // Recomputes every numeric part for a new tangent A (same pattern as at construction) and
   // new current positions: near-null space, QR, block inverses, smoothed prolongators,
-  // Galerkin products, coarse inverse. The aggregates and symbolic products are kept.
+  // Galerkin products, coarse inverse. The aggregates and product patterns are kept.
   void update(const matrix_type& A, const positions_type& positions) {
     checkInput(A, positions);
     if (A.nnz() != levels_[0].A.nnz())
@@ -382,6 +351,8 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
   // The transfer from level + 1 to level (absent on the coarsest level).
   const matrix_type& prolongator(int level) const { return levels_.at(level).P; }
   const matrix_type& tentativeProlongator(int level) const { return levels_.at(level).Ptent; }
+  // The restriction from level to level + 1 (P^T, computed by transposition).
+  const matrix_type& restrictor(int level) const { return levels_.at(level).R; }
   const near_null_space_type& nearNullSpace(int level) const { return levels_.at(level).nearNullSpace; }
 
   void Apply(const Belos::MultiVec<double>& x, Belos::MultiVec<double>& y,
@@ -413,7 +384,6 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     Kokkos::View<LocalIndex*, detail::DeviceOf<ExecutionSpaceT>> aggregateMembers, aggregateOf;
     matrix_type Ptent, Z, P, R, AP;
     typename matrix_type::row_map_type::non_const_type transposeRowMap;  // R's row map
-    std::shared_ptr<detail::KernelHandle<ExecutionSpaceT>> productZ, productAP, productCoarse;
     vector_type x, b, r, w;  // work vectors of this level's size
   };
 
@@ -427,7 +397,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     }
   }
 
-  // Aggregates and symbolic products of level l, then its numeric parts; appends level l + 1.
+  // Aggregates and product patterns of level l, then its numeric parts; appends level l + 1.
   void buildTransfer(std::size_t l, const Aggregates& aggregates) {
     const LocalIndex numRows = levels_[l].A.numRows();
     const LocalIndex numCoarseRows = dofPerNode * aggregates.numAggregates;
@@ -473,8 +443,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     levels_[l + 1].b = vector_type("perishell::amg::b_" + nextTag, numCoarseRows);
     Level& level = levels_[l];
     computeFineNumerics(l);
-    level.productZ = std::make_shared<detail::KernelHandle<ExecutionSpaceT>>();
-    level.Z = detail::multiplySymbolic(*level.productZ, level.scaledA, level.Ptent, "perishell::amg::z_" + tag);
+    level.Z = productPattern(level.scaledA, level.Ptent, "perishell::amg::z_" + tag);
     level.P = matrix_type("perishell::amg::p_" + tag, numRows, numCoarseRows, level.Z.nnz(),
                           typename matrix_type::values_type::non_const_type("perishell::amg::p_" + tag, level.Z.nnz()),
                           level.Z.graph.row_map, level.Z.graph.entries);
@@ -484,14 +453,9 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
                           level.transposeRowMap,
                           typename matrix_type::index_type::non_const_type("perishell::amg::r_" + tag, level.Z.nnz()));
     computeProlongator(l);
-    level.productAP = std::make_shared<detail::KernelHandle<ExecutionSpaceT>>();
-    level.AP = detail::multiplySymbolic(*level.productAP, level.A, level.P, "perishell::amg::ap_" + tag);
-    // The symbolic product R (A P) reads A P's entries, which only a numeric product fills.
-    detail::multiplyNumeric(*level.productAP, level.A, level.P, level.AP);
-    level.productCoarse = std::make_shared<detail::KernelHandle<ExecutionSpaceT>>();
-    levels_[l + 1].A = detail::multiplySymbolic(*level.productCoarse, level.R, level.AP,
-                                                "perishell::amg::a_" + nextTag);
-    computeCoarseMatrix(l);
+    level.AP = productPattern(level.A, level.P, "perishell::amg::ap_" + tag);
+    levels_[l + 1].A = productPattern(level.R, level.AP, "perishell::amg::a_" + nextTag);
+    computeGalerkin(l);
   }
 
   template <class T, class DeviceView>
@@ -531,7 +495,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
   // Z = D^-1 A P_tent, P = P_tent - omega Z, R = P^T.
   void computeProlongator(std::size_t l) {
     Level& level = levels_[l];
-    detail::multiplyNumeric(*level.productZ, level.scaledA, level.Ptent, level.Z);
+    multiplyInto(space_, level.scaledA, level.Ptent, level.Z);
     const double omega = 4.0 / (3.0 * level.lambdaMax);
     detail::smoothProlongator(space_, level.aggregateOf, level.Ptent.values, level.Z, omega, level.P.values);
     space_.fence();
@@ -540,13 +504,9 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
 
   // A_{l+1} = R (A P).
   void computeGalerkin(std::size_t l) {
-    detail::multiplyNumeric(*levels_[l].productAP, levels_[l].A, levels_[l].P, levels_[l].AP);
-    computeCoarseMatrix(l);
-  }
-
-  void computeCoarseMatrix(std::size_t l) {
     Level& level = levels_[l];
-    detail::multiplyNumeric(*level.productCoarse, level.R, level.AP, levels_[l + 1].A);
+    multiplyInto(space_, level.A, level.P, level.AP);
+    multiplyInto(space_, level.R, level.AP, levels_[l + 1].A);
     detail::unitDiagonalOnEmptyRows(space_, levels_[l + 1].A);
     space_.fence();
   }

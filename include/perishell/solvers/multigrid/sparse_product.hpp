@@ -1,0 +1,96 @@
+#pragma once
+// Sparse matrix product C = A B for the Galerkin products of smoothed aggregation: the
+// pattern of C once per sparsity pattern on the host (like the aggregates), the values on the
+// device at every update, one thread per row of C and no atomics (a thread owns its row).
+//
+// Kokkos Kernels 3.4's spgemm is not used: on the H100 (sm_90, CUDA 13) every device variant
+// (SPGEMM_KK, _KK_MEMORY, _KK_DENSE, _KK_LP, _KK_SPEED, _KK_MEMORY_SORTED) wrote out of bounds
+// or returned a wrong product for these matrices, and only its host fallback was right
+// (tstSmoothedAggregation's consistency tests, 2026-11-22).
+#include <perishell/core/types.hpp>
+#include <perishell/solvers/belos/crs_operator.hpp>
+
+#include <Kokkos_Core.hpp>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+namespace perishell::multigrid {
+
+// C's pattern with rows sorted and zero values: column j is in row i when some A(i, k) and
+// B(k, j) are both stored (structural, whatever their values).
+template <class ExecutionSpaceT>
+belos::CrsMatrix<ExecutionSpaceT> productPattern(const belos::CrsMatrix<ExecutionSpaceT>& A,
+                                                 const belos::CrsMatrix<ExecutionSpaceT>& B, const std::string& label) {
+  using Matrix = belos::CrsMatrix<ExecutionSpaceT>;
+  const auto aRows = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, A.graph.row_map);
+  const auto aColumns = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, A.graph.entries);
+  const auto bRows = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, B.graph.row_map);
+  const auto bColumns = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, B.graph.entries);
+  const LocalIndex numRows = A.numRows(), numCols = B.numCols();
+  std::vector<RowOffset> rowMap{0};
+  rowMap.reserve(numRows + 1);
+  std::vector<LocalIndex> columns;
+  std::vector<LocalIndex> lastRowWith(numCols, -1);
+  for (LocalIndex row = 0; row < numRows; ++row) {
+    const std::size_t first = columns.size();
+    for (RowOffset a = aRows(row); a < aRows(row + 1); ++a) {
+      const LocalIndex k = aColumns(a);
+      for (RowOffset b = bRows(k); b < bRows(k + 1); ++b) {
+        const LocalIndex column = bColumns(b);
+        if (lastRowWith[column] == row) continue;
+        lastRowWith[column] = row;
+        columns.push_back(column);
+      }
+    }
+    std::sort(columns.begin() + first, columns.end());
+    rowMap.push_back(columns.size());
+  }
+  typename Matrix::row_map_type::non_const_type deviceRowMap(label + " row map", rowMap.size());
+  typename Matrix::index_type::non_const_type deviceColumns(label + " entries", columns.size());
+  Kokkos::deep_copy(deviceRowMap, Kokkos::View<const RowOffset*, Kokkos::HostSpace, Kokkos::MemoryTraits<Kokkos::Unmanaged>>(
+                                      rowMap.data(), rowMap.size()));
+  Kokkos::deep_copy(deviceColumns, Kokkos::View<const LocalIndex*, Kokkos::HostSpace, Kokkos::MemoryTraits<Kokkos::Unmanaged>>(
+                                       columns.data(), columns.size()));
+  typename Matrix::values_type::non_const_type values(label + " values", columns.size());
+  return Matrix(label, numRows, numCols, static_cast<RowOffset>(columns.size()), values, deviceRowMap, deviceColumns);
+}
+
+// C's values = A B, for C from productPattern(A, B) (the same patterns of A and B).
+template <class ExecutionSpaceT>
+void multiplyInto(const ExecutionSpaceT& space, const belos::CrsMatrix<ExecutionSpaceT>& A,
+                  const belos::CrsMatrix<ExecutionSpaceT>& B, const belos::CrsMatrix<ExecutionSpaceT>& C) {
+  const auto aRows = A.graph.row_map;
+  const auto aColumns = A.graph.entries;
+  const auto aValues = A.values;
+  const auto bRows = B.graph.row_map;
+  const auto bColumns = B.graph.entries;
+  const auto bValues = B.values;
+  const auto cRows = C.graph.row_map;
+  const auto cColumns = C.graph.entries;
+  const auto cValues = C.values;
+  Kokkos::parallel_for(
+      "perishell::amg::sparse_product", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, C.numRows()),
+      KOKKOS_LAMBDA(const LocalIndex row) {
+        const RowOffset first = cRows(row), last = cRows(row + 1);
+        for (RowOffset c = first; c < last; ++c) cValues(c) = 0.0;
+        for (RowOffset a = aRows(row); a < aRows(row + 1); ++a) {
+          const double aValue = aValues(a);
+          const LocalIndex k = aColumns(a);
+          for (RowOffset b = bRows(k); b < bRows(k + 1); ++b) {
+            // Binary search of the column in C's sorted row (it is there by construction).
+            const LocalIndex column = bColumns(b);
+            RowOffset low = first, high = last;
+            while (high - low > 1) {
+              const RowOffset middle = low + (high - low) / 2;
+              if (cColumns(middle) <= column) low = middle;
+              else high = middle;
+            }
+            cValues(low) += aValue * bValues(b);
+          }
+        }
+      });
+}
+
+}  // namespace perishell::multigrid
