@@ -669,7 +669,7 @@ deck::Solver readSolver(const Section& section) {
   using deck::SolverType;
   const std::vector<std::string> explicitKeys{"type", "end-time", "steps", "dt", "safety-factor", "damping"};
   const std::vector<std::string> implicitKeys{"type", "increments", "max-iterations", "tolerance",
-                                              "preconditioner", "max-cuts"};
+                                              "preconditioner", "max-cuts", "tangent"};
   std::vector<std::string> allKeys = explicitKeys;
   allKeys.insert(allKeys.end(), implicitKeys.begin() + 1, implicitKeys.end());
   section.allowOnly(allKeys);
@@ -719,6 +719,10 @@ deck::Solver readSolver(const Section& section) {
          {"block-jacobi", deck::Preconditioner::BlockJacobi},
          {"amg", deck::Preconditioner::Amg}},
         settings.preconditioner);
+    settings.tangent = section.choice<deck::Tangent>(
+        "tangent",
+        {{"auto", deck::Tangent::Auto}, {"symmetric", deck::Tangent::Symmetric}, {"exact", deck::Tangent::Exact}},
+        settings.tangent);
     if (section.has("max-cuts")) {
       const double cuts = section.number("max-cuts");
       if (!(cuts >= 0 && cuts <= 30 && cuts == std::floor(cuts)))

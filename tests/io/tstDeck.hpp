@@ -285,6 +285,7 @@ perishell:
     max-iterations: 50
     tolerance: 1.0e-6
     preconditioner: jacobi
+    tangent: exact
   output:
     directory: /tmp/perishell-results
     every: 10
@@ -357,6 +358,7 @@ perishell:
   EXPECT_EQ(deck.solver.implicitSettings.maxIterations, 50);
   EXPECT_DOUBLE_EQ(deck.solver.implicitSettings.tolerance, 1.0e-6);
   EXPECT_EQ(deck.solver.implicitSettings.preconditioner, deck::Preconditioner::Jacobi);
+  EXPECT_EQ(deck.solver.implicitSettings.tangent, deck::Tangent::Exact);
 
   EXPECT_EQ(deck.output.directory, "/tmp/perishell-results");  // absolute stays
   EXPECT_EQ(deck.output.every, 10);
@@ -404,6 +406,7 @@ TEST(TEST_CATEGORY, deck_defaults_fill_what_a_minimal_deck_leaves_out) {
   EXPECT_EQ(implicitSettings.maxIterations, 100);
   EXPECT_DOUBLE_EQ(implicitSettings.tolerance, 1e-8);
   EXPECT_EQ(implicitSettings.preconditioner, deck::Preconditioner::Amg);
+  EXPECT_EQ(implicitSettings.tangent, deck::Tangent::Auto);
   EXPECT_TRUE(implicitDeck.warnings.empty());
 }
 
@@ -567,6 +570,8 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
       {"implicit without supports",
        {{"  supports:\n    left:\n      set: left\n      dofs: [ux, uy, uz, rx, ry, rz]\n", ""}}, "supports",
        {"an unsupported model is singular"}},
+      {"unknown tangent", {{"    increments: 10\n", "    increments: 10\n    tangent: skew\n"}}, "solver.tangent",
+       {"'skew' is not one of auto, symmetric, exact"}},
       {"unknown generator", {{"generator: plate", "generator: disc"}}, "mesh.generator",
        {"'disc' is not one of plate, cylinder, hexagonal-prism, gmsh"}},
       {"unsupported version", {{"version: 1", "version: 2"}}, "version", {"unsupported deck version 2"}},

@@ -10,7 +10,7 @@
 namespace {
 
 using perishell::pd::MicrobeamEnd;
-using perishell::pd::TangentForm;
+using perishell::TangentForm;
 using Matrix12 = Eigen::Matrix<double, 12, 12, Eigen::RowMajor>;
 
 const perishell::pd::Micromoduli moduli = perishell::pd::microbeamMicromoduli(70e9, 0.25, 1e-3, 3e-3);

@@ -31,6 +31,12 @@ using CoordinateView = Kokkos::View<double* [3], Kokkos::LayoutRight, MemorySpac
 template <class MemorySpaceT>
 using QuadConnectivityView = Kokkos::View<LocalIndex* [4], Kokkos::LayoutRight, MemorySpaceT>;
 
+// Which tangent the implicit kernels assemble (model.md §5): the exact derivative of the
+// internal force under R <- exp(phi) R, non-symmetric by -1/2 skew(m) on a node's rotation
+// block where moments act, or its symmetric part, which CG can solve with. The two agree at
+// equilibrium where no moment is applied.
+enum class TangentForm { Exact, Symmetric };
+
 template <class ExecutionSpaceT>
 inline constexpr bool is_execution_space_v = Kokkos::is_execution_space<ExecutionSpaceT>::value;
 

@@ -158,6 +158,8 @@ struct Curve {
 
 enum class SolverType { Explicit, Implicit };
 enum class Preconditioner { Jacobi, BlockJacobi, Amg };
+// Auto: Exact where the model applies moments, else Symmetric (TangentForm, core/types.hpp).
+enum class Tangent { Auto, Symmetric, Exact };
 
 struct ExplicitSettings {
   // Exactly one of endTime / steps is set.
@@ -174,6 +176,7 @@ struct ImplicitSettings {
   double tolerance = 1e-8;  // Newton: residual norm relative to the external load norm
   Preconditioner preconditioner = Preconditioner::Amg;  // 10-100x fewer PCG iterations on thin shells (docs/implicit.md)
   int maxCuts = 8;  // bisections of an increment Newton fails on, before the run stops
+  Tangent tangent = Tangent::Auto;
 };
 
 struct Solver {

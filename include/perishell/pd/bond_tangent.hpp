@@ -10,8 +10,6 @@
 
 namespace perishell::pd {
 
-enum class TangentForm { Exact, Symmetric };
-
 // K = -d(forces, moments)/d(u_i, phi_i, u_j, phi_j) per unit V_i V_j (Exact), or its
 // symmetric part (what CG solves with); order of rows and columns: end i's ux uy uz rx ry
 // rz, then end j's.
@@ -51,13 +49,14 @@ KOKKOS_INLINE_FUNCTION void microbeamTangent(const Micromoduli& c, const Microbe
     }
 }
 
-// Adds every intact bond's symmetric tangent (the one CG solves with), scaled by its volume weight, into the CRS values through
+// Adds every intact bond's tangent in the given form, scaled by its volume weight, into the CRS values through
 // the pattern's precomputed slots (one thread per bond, atomic_add: paper §3.2.1). The
 // pattern's bond b is the body's half bond b, its ends mapped to the pattern's node numbers.
 template <class ExecutionSpaceT, class MemorySpaceT, class PatternT>
 void assembleBondTangent(const ExecutionSpaceT& space, const PdBody<MemorySpaceT>& body,
                          const PdKinematics<MemorySpaceT>& state, const BondFlagView<MemorySpaceT>& intact,
-                         const PatternT& pattern, const VectorView<MemorySpaceT>& values) {
+                         const PatternT& pattern, const VectorView<MemorySpaceT>& values,
+                         TangentForm form = TangentForm::Symmetric) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   Kokkos::parallel_for(
       "perishell::pd::assembleBondTangent", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.bonds.numBonds()),
@@ -69,7 +68,7 @@ void assembleBondTangent(const ExecutionSpaceT& space, const PdBody<MemorySpaceT
         detail::loadBondEnd(body, state, j, ends[1]);
         double tangent[12][12];
         microbeamTangent(bondMicromoduli(body, b), ends[0], ends[1], body.bonds.referenceLength(b),
-                         TangentForm::Symmetric, tangent);
+                         form, tangent);
         const double weight = bondVolumeWeight(body, i, j, b);
         for (int r = 0; r < 12; ++r)
           for (int s = 0; s < 12; ++s) tangent[r][s] *= weight;

@@ -549,7 +549,7 @@ KOKKOS_INLINE_FUNCTION double shellTangent(const double referencePositions[4][3]
 }
 
 // Turns the symmetric K_T into the exact derivative of f under R_a <- exp(dphi_a) R_a
-// (pd::TangentForm::Exact's convention): df_phi_a/dphi_a = K_T - 1/2 skew(m_a), m_a the
+// (TangentForm::Exact, core/types.hpp): df_phi_a/dphi_a = K_T - 1/2 skew(m_a), m_a the
 // node's moment in f. Non-symmetric; summed over elements at equilibrium the term is
 // -1/2 skew(applied moment), so it vanishes where no moment is applied.
 KOKKOS_INLINE_FUNCTION void addRotationAsymmetry(const double force[shellDofCount],

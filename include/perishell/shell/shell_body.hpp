@@ -131,7 +131,7 @@ void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpa
 template <class ExecutionSpaceT, class MemorySpaceT, class PatternT>
 void assembleShellTangent(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
                           const pd::PdKinematics<MemorySpaceT>& state, const PatternT& pattern,
-                          const VectorView<MemorySpaceT>& values) {
+                          const VectorView<MemorySpaceT>& values, TangentForm form = TangentForm::Symmetric) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   Kokkos::parallel_for(
       "perishell::shell::assembleShellTangent", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numElements()),
@@ -141,6 +141,7 @@ void assembleShellTangent(const ExecutionSpaceT& space, const ShellBody<MemorySp
         for (int r = 0; r < 24; ++r)
           for (int s = 0; s < 24; ++s) localStiffness[r][s] = body.localStiffness(e, r, s);
         shellTangent(reference, current, rotations, localStiffness, force, tangent);
+        if (form == TangentForm::Exact) addRotationAsymmetry(force, tangent);
         pattern.atomicAddElementMatrix(e, tangent, values);
       });
 }

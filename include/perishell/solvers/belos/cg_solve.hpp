@@ -37,6 +37,9 @@ struct CgOptions {
   enum class Preconditioner { None, Jacobi, BlockJacobi, Amg } preconditioner = Preconditioner::Jacobi;
   // Rows per diagonal block for BlockJacobi: the DOF of one node (6 for a shell node).
   int blockSize = 6;
+  // Cg for a symmetric A; Gmres from the start for a non-symmetric one (the exact tangent
+  // under applied moments, TangentForm::Exact).
+  enum class Method { Cg, Gmres } method = Method::Cg;
   // On a CG breakdown, restart from the initial guess with GMRES instead of throwing.
   bool fallbackOnBreakdown = true;
   // Krylov vectors GMRES builds before it restarts; it stores that many vectors of length n.
@@ -48,7 +51,7 @@ struct CgResult {
   int iterations = 0;  // of the method that produced x
   // Largest relative residual Belos measured at the end (its achievedTol()).
   double achievedTolerance = 0.0;
-  std::string method = "CG";  // "CG", or "GMRES" after a CG breakdown
+  std::string method = "CG";  // "CG", or "GMRES" (asked for, or after a CG breakdown)
   std::string breakdown;      // why CG broke down when method is "GMRES", else empty
 };
 
@@ -150,7 +153,7 @@ void checkCgArguments(const CrsMatrix<ExecutionSpaceT>& A,
                                 std::to_string(options.tolerance) + " and " +
                                 std::to_string(options.maxIterations));
   }
-  if (options.fallbackOnBreakdown && options.gmresRestart < 1) {
+  if ((options.fallbackOnBreakdown || options.method == CgOptions::Method::Gmres) && options.gmresRestart < 1) {
     throw std::invalid_argument("perishell::belos::solveCg: gmresRestart must be at least 1, got " +
                                 std::to_string(options.gmresRestart));
   }
@@ -161,7 +164,8 @@ void checkCgArguments(const CrsMatrix<ExecutionSpaceT>& A,
 
 }  // namespace detail
 
-// Solves A x = b, meant for symmetric positive definite A (CG). x holds the initial guess on
+// Solves A x = b, meant for symmetric positive definite A (CG), or for any non-singular A
+// with options.method Gmres (then GMRES from the start). x holds the initial guess on
 // entry and the solution on return (also when the solver did not converge); b is not
 // modified. Both are used in place, without copies. When CG breaks down (A or the
 // preconditioner not SPD) and options.fallbackOnBreakdown is set, x is reset to the initial
@@ -195,35 +199,35 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
   const Teuchos::RCP<const MV> B = Teuchos::rcp(new KokkosMultiVector<ExecutionSpaceT>(b2d));
   const Teuchos::RCP<const OP> op = Teuchos::rcp(new CrsOperator<ExecutionSpaceT>(A));
 
-  // CG overwrites x as it goes; the fallback restarts from the caller's guess.
-  VectorView<memory_space> initialGuess;
-  if (options.fallbackOnBreakdown) {
-    initialGuess = VectorView<memory_space>(
-        Kokkos::view_alloc(Kokkos::WithoutInitializing, "perishell::belos::initial_guess"), n);
-    Kokkos::deep_copy(initialGuess, x);
-  }
-
-  const auto params = Teuchos::parameterList("perishell CG");
-  params->set("Convergence Tolerance", options.tolerance);
-  params->set("Maximum Iterations", options.maxIterations);
-
   std::string breakdown;
-  try {
-    Belos::PseudoBlockCGSolMgr<double, MV, OP> cg(detail::makeProblem(op, X, B, preconditioner), params);
-    const CgResult result = detail::runSolver(cg, "CG", "");
-    // x2d aliases x, and CGIter writes the iterate straight into X; the fence makes the
-    // result visible to the caller's next host access.
-    ExecutionSpaceT().fence();
-    return result;
-  } catch (const Belos::CGIterateFailure& e) {
-    breakdown =
-        "CG broke down: the matrix or the preconditioner is not symmetric positive definite (the step "
-        "length r^T M r / p^T A p was not positive). Belos: " +
-        detail::oneLine(e.what());
-    if (!options.fallbackOnBreakdown) throw std::runtime_error("perishell::belos::solveCg: " + breakdown);
+  if (options.method == CgOptions::Method::Cg) {
+    // CG overwrites x as it goes; the fallback restarts from the caller's guess.
+    VectorView<memory_space> initialGuess;
+    if (options.fallbackOnBreakdown) {
+      initialGuess = VectorView<memory_space>(
+          Kokkos::view_alloc(Kokkos::WithoutInitializing, "perishell::belos::initial_guess"), n);
+      Kokkos::deep_copy(initialGuess, x);
+    }
+    const auto params = Teuchos::parameterList("perishell CG");
+    params->set("Convergence Tolerance", options.tolerance);
+    params->set("Maximum Iterations", options.maxIterations);
+    try {
+      Belos::PseudoBlockCGSolMgr<double, MV, OP> cg(detail::makeProblem(op, X, B, preconditioner), params);
+      const CgResult result = detail::runSolver(cg, "CG", "");
+      // x2d aliases x, and CGIter writes the iterate straight into X; the fence makes the
+      // result visible to the caller's next host access.
+      ExecutionSpaceT().fence();
+      return result;
+    } catch (const Belos::CGIterateFailure& e) {
+      breakdown =
+          "CG broke down: the matrix or the preconditioner is not symmetric positive definite (the step "
+          "length r^T M r / p^T A p was not positive). Belos: " +
+          detail::oneLine(e.what());
+      if (!options.fallbackOnBreakdown) throw std::runtime_error("perishell::belos::solveCg: " + breakdown);
+    }
+    Kokkos::deep_copy(x, initialGuess);
   }
 
-  Kokkos::deep_copy(x, initialGuess);
   const auto gmresParams = Teuchos::parameterList("perishell GMRES");
   gmresParams->set("Convergence Tolerance", options.tolerance);
   gmresParams->set("Maximum Iterations", options.maxIterations);

@@ -14,6 +14,16 @@ namespace perishell::solvers {
 // mixed PD-CCM models (they need the coupling of model.md §4), follower pressure.
 void requireImplicitModel(const model::Model& model);
 
+// Whether any load pattern has a moment component (checked once, at set-up).
+template <class MemorySpaceT>
+bool appliesMoments(const ExternalActions<MemorySpaceT>& actions) {
+  const auto patterns = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions.loadPatterns);
+  for (std::size_t node = 0; node < patterns.extent(0); ++node)
+    for (std::size_t column = 0; column < patterns.extent(1); ++column)
+      if (column % 6 >= 3 && patterns(node, column) != 0.0) return true;
+  return false;
+}
+
 template <class ExecutionSpaceT>
 StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& space, const model::Model& model) {
   requireImplicitModel(model);
@@ -45,8 +55,13 @@ StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& spac
     case deck::Preconditioner::BlockJacobi: options.preconditioner = belos::CgOptions::Preconditioner::BlockJacobi; break;
     case deck::Preconditioner::Amg: options.preconditioner = belos::CgOptions::Preconditioner::Amg; break;
   }
+  auto actions = makeExternalActions<Memory>(model);
+  options.tangent = settings.tangent == deck::Tangent::Exact ||
+                            (settings.tangent == deck::Tangent::Auto && appliesMoments(actions))
+                        ? TangentForm::Exact
+                        : TangentForm::Symmetric;
   return StaticNewtonSolver<ExecutionSpaceT>(space, model.shell.mesh.numNodes(), std::move(shellBody),
-                                             std::move(pdBody), makeExternalActions<Memory>(model), options);
+                                             std::move(pdBody), std::move(actions), options);
 }
 
 }  // namespace perishell::solvers

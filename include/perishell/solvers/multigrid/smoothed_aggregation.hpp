@@ -301,7 +301,8 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
   using near_null_space_type = detail::NearNullSpace<ExecutionSpaceT>;
   using positions_type = CoordinateView<memory_space>;
 
-  // A: symmetric, 6 DOF per node in consecutive rows, rows sorted, the rows of one node
+  // A: symmetric for CG (non-symmetric, e.g. the exact tangent, for GMRES: then the V-cycle
+  // is not symmetric either, and only Apply without transpose is meaningful), 6 DOF per node in consecutive rows, rows sorted, the rows of one node
   // sharing one column pattern (the NodalBlockPattern layout); supports eliminated.
   // positions: the nodes' current coordinates [m]. Builds the hierarchy (aggregation and
   // product patterns on the host once, numeric parts on the device, again at update()).
@@ -513,6 +514,9 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
 
   // Dense inverse of the coarsest matrix, computed on the host with Eigen (a few hundred DOF)
   // after symmetric diagonal scaling, so the singularity test does not depend on units.
+  // A symmetric matrix (the tangent CG solves with) must be positive definite (Cholesky, and
+  // the inverse symmetrised so that the V-cycle stays symmetric); a non-symmetric one (the
+  // exact tangent under applied moments, solved by GMRES) need only be non-singular (LU).
   void factorCoarsest() {
     const matrix_type& A = levels_.back().A;
     const auto n = static_cast<Eigen::Index>(A.numRows());
@@ -528,18 +532,31 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     Eigen::VectorXd scale(n);
     for (Eigen::Index i = 0; i < n; ++i) scale(i) = dense(i, i) > 0.0 ? 1.0 / std::sqrt(dense(i, i)) : 1.0;
     const Eigen::MatrixXd scaled = scale.asDiagonal() * dense * scale.asDiagonal();
-    const Eigen::LLT<Eigen::MatrixXd> cholesky(0.5 * (scaled + scaled.transpose()));
-    const double rcond = cholesky.info() == Eigen::Success ? cholesky.rcond() : 0.0;
-    if (!(rcond > belos::detail::singularPivot)) {
+    const bool symmetric = (scaled - scaled.transpose()).norm() <= 1e-12 * scaled.norm();
+    const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(n, n);
+    Eigen::MatrixXd inverse;
+    double rcond = 0.0;
+    if (symmetric) {
+      const Eigen::LLT<Eigen::MatrixXd> cholesky(0.5 * (scaled + scaled.transpose()));
+      if (cholesky.info() == Eigen::Success) {
+        rcond = cholesky.rcond();
+        inverse = cholesky.solve(identity);
+        inverse = 0.5 * (inverse + inverse.transpose()).eval();
+      }
+    } else {
+      const Eigen::PartialPivLU<Eigen::MatrixXd> lu(scaled);
+      rcond = lu.rcond();
+      inverse = lu.solve(identity);
+    }
+    if (!(rcond > belos::detail::singularPivot) || !inverse.allFinite()) {
       std::ostringstream msg;
-      msg << who << ": the coarse problem (level " << levels_.size() - 1 << ", " << n
-          << " DOF) is singular or indefinite (reciprocal condition estimate " << rcond
+      msg << who << ": the coarse problem (level " << levels_.size() - 1 << ", " << n << " DOF) is singular"
+          << (symmetric ? " or indefinite" : "") << " (reciprocal condition estimate " << rcond
           << " after diagonal scaling): the model is free to move as a rigid body or is a mechanism; check the "
              "supports";
       throw std::runtime_error(msg.str());
     }
-    Eigen::MatrixXd inverse = scale.asDiagonal() * cholesky.solve(Eigen::MatrixXd::Identity(n, n)) * scale.asDiagonal();
-    inverse = 0.5 * (inverse + inverse.transpose()).eval();
+    inverse = (scale.asDiagonal() * inverse * scale.asDiagonal()).eval();
     if (coarseInverse_.extent(0) != static_cast<std::size_t>(n))
       coarseInverse_ = decltype(coarseInverse_)("perishell::amg::coarse_inverse", n, n);
     const auto host = Kokkos::create_mirror_view(coarseInverse_);
