@@ -223,6 +223,21 @@ TEST(TEST_CATEGORY, static_newton_sze_cantilever_under_end_shear_pd) {
   EXPECT_LT(worstTipError(solver, model, sze31, 6.698, "Sze 3.1 PD"), 0.03);
 }
 
+TEST(TEST_CATEGORY, static_newton_sze_cantilever_rolled_into_a_circle_pd) {
+  using namespace perishell_test_static_newton;
+  // M_max = 2 pi E I / L shared by the 9 end nodes (dx = 0.125 across the 1 m width).
+  const double momentPerNode = 50.0 * 3.14159265358979323846 / 3.0 / 9.0;
+  const auto model = stripModel("pd", 0.125, 12.0,
+                                "{type: point-force, set: right, vector: [0.0, 0.0, 0.0], moment: [0.0, " +
+                                    std::to_string(-momentPerNode) + ", 0.0]}",
+                                "increments: 20, max-iterations: 100, tolerance: 1.0e-6");
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  // Newton follows the full circle, but the PD strip is about 6 % too stiff under the end
+  // moment (the tip turns 0.94 x 2 pi at M_max): worst 7.0 % of L at P/Pmax 0.7, over the
+  // issue's 3 % target (docs/implicit.md). This bounds it against regressions.
+  EXPECT_LT(worstTipError(solver, model, sze32, 12.0, "Sze 3.2 PD"), 0.075);
+}
+
 namespace perishell_test_static_newton {
 
 // Tip displacements after Sze 3.1 up to P/P_max = 0.5, solved on execution space Space.
