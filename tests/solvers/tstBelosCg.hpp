@@ -781,6 +781,37 @@ TEST(TEST_CATEGORY, belos_cg_falls_back_to_gmres_on_indefinite_matrix) {
   }
 }
 
+// Method::Gmres (the exact, non-symmetric Newton tangent) solves with GMRES from the start:
+// a convection-diffusion-like tridiagonal matrix, far from symmetric.
+TEST(TEST_CATEGORY, belos_cg_gmres_method_solves_a_non_symmetric_matrix) {
+  using namespace perishell_test_belos_cg;
+  const int n = 120;
+  HostRows rows(n);
+  std::vector<double> exact(n);
+  for (int i = 0; i < n; ++i) {
+    rows[i][i] = 4.0;
+    if (i > 0) rows[i][i - 1] = -2.5;
+    if (i + 1 < n) rows[i][i + 1] = 0.5;
+    exact[i] = std::sin(0.1 * i) + 1.0;
+  }
+  const auto A = matrixOnDevice<TEST_EXECSPACE>(rows);
+  const auto exactOnDevice = vectorOnDevice<TEST_EXECSPACE>(exact);
+  const auto b = multiply(A, exactOnDevice);
+  auto options = cgOptions(perishell::belos::CgOptions::Preconditioner::Jacobi, 1e-10, 500);
+  options.method = perishell::belos::CgOptions::Method::Gmres;
+  Vector<TEST_EXECSPACE> x("x", n);
+  const auto result = perishell::belos::solveCg(A, b, x, options);
+  const double residual = relativeResidual(A, x, b);
+  std::cout << "[ belos cg ] non-symmetric 120 x 120: " << result.method << " in " << result.iterations
+            << " iterations, relative residual " << residual << ", relative error " << relativeError(x, exactOnDevice)
+            << "\n";
+  EXPECT_EQ(result.method, "GMRES");
+  EXPECT_TRUE(result.breakdown.empty()) << result.breakdown;
+  EXPECT_TRUE(result.converged);
+  EXPECT_LE(residual, 1e-10);
+  EXPECT_LE(relativeError(x, exactOnDevice), 1e-8);
+}
+
 TEST(TEST_CATEGORY, belos_cg_block_jacobi_rejects_singular_blocks) {
   using namespace perishell_test_belos_cg;
   const auto expectFailure = [](const Matrix<TEST_EXECSPACE>& A, const std::vector<std::string>& needles) {

@@ -334,7 +334,7 @@ class StaticNewtonSolver {
   }
 
   // The block-Jacobi family is rebuilt from K; the multigrid hierarchy is built once (its
-  // aggregates and symbolic products depend only on the pattern) and updated with K and the
+  // aggregates and product patterns depend only on the pattern) and updated with K and the
   // current node positions (its rigid-body modes).
   Teuchos::RCP<const Belos::Operator<double>> preconditionerFor(const Matrix& K, const belos::CgOptions& linear) {
     if (options_.preconditioner != belos::CgOptions::Preconditioner::Amg) return belos::detail::makePreconditioner(K, linear);

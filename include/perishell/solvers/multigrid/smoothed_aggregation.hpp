@@ -38,10 +38,8 @@
 #include <KokkosBlas1_nrm2.hpp>
 #include <KokkosBlas1_scal.hpp>
 #include <KokkosBlas2_gemv.hpp>
-#include <KokkosKernels_SparseUtils.hpp>
 #include <KokkosSparse_spmv.hpp>
 #include <Kokkos_Core.hpp>
-#include <Kokkos_Random.hpp>
 
 #include <Eigen/Dense>
 
@@ -200,13 +198,22 @@ void scaleByBlockInverse(const ExecutionSpaceT& space, const belos::detail::Bloc
       });
 }
 
-// Largest eigenvalue of D^-1 A by power iterations from a fixed pseudo-random start.
+// Largest eigenvalue of D^-1 A by power iterations from a fixed pseudo-random start (a hash
+// of the row index, so no random pool is built per update); x and y are work vectors.
 template <class ExecutionSpaceT>
-double largestEigenvalue(const Matrix<ExecutionSpaceT>& scaled, int iterations) {
-  const auto n = static_cast<std::size_t>(scaled.numRows());
-  Vector<ExecutionSpaceT> x("perishell::amg::power_x", n), y("perishell::amg::power_y", n);
-  Kokkos::Random_XorShift64_Pool<ExecutionSpaceT> pool(20240611);
-  Kokkos::fill_random(x, pool, -1.0, 1.0);
+double largestEigenvalue(const ExecutionSpaceT& space, const Matrix<ExecutionSpaceT>& scaled, int iterations,
+                         const Vector<ExecutionSpaceT>& x, const Vector<ExecutionSpaceT>& y) {
+  Kokkos::parallel_for(
+      "perishell::amg::power_start", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, scaled.numRows()),
+      KOKKOS_LAMBDA(const LocalIndex row) {
+        // splitmix64 finaliser: well-mixed bits, mapped to [-1, 1)
+        std::uint64_t z = static_cast<std::uint64_t>(row) + 0x9e3779b97f4a7c15ull;
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+        z ^= z >> 31;
+        x(row) = 2.0 * static_cast<double>(z >> 11) * 0x1.0p-53 - 1.0;
+      });
+  space.fence();
   KokkosBlas::scal(x, 1.0 / KokkosBlas::nrm2(x), x);
   double lambda = 0.0;
   for (int k = 0; k < iterations; ++k) {
@@ -271,20 +278,6 @@ void blockJacobiUpdate(const ExecutionSpaceT& space, const belos::detail::BlockI
         for (int j = 0; j < dofPerNode; ++j) sum += inverses(node, dof, j) * r(dofPerNode * node + j);
         w(row) = (a == 0.0 ? 0.0 : a * w(row)) + c * sum;
       });
-}
-
-// T = P^T into T's preallocated views (rowMap is T's row map, zeroed here), rows sorted.
-template <class ExecutionSpaceT>
-void transposeInto(const Matrix<ExecutionSpaceT>& P, const typename Matrix<ExecutionSpaceT>::row_map_type::non_const_type& rowMap,
-                   const Matrix<ExecutionSpaceT>& T) {
-  using M = Matrix<ExecutionSpaceT>;
-  using RowMap = typename M::row_map_type::non_const_type;
-  Kokkos::deep_copy(rowMap, RowOffset(0));
-  KokkosKernels::Impl::transpose_matrix<typename M::row_map_type, typename M::index_type, typename M::values_type,
-                                        RowMap, typename M::index_type::non_const_type,
-                                        typename M::values_type::non_const_type, RowMap, ExecutionSpaceT>(
-      P.numRows(), P.numCols(), P.graph.row_map, P.graph.entries, P.values, rowMap, T.graph.entries, T.values);
-  KokkosKernels::Impl::sort_crs_matrix(T);
 }
 
 }  // namespace detail
@@ -384,7 +377,8 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     Kokkos::View<RowOffset*, detail::DeviceOf<ExecutionSpaceT>> aggregateOffsets;
     Kokkos::View<LocalIndex*, detail::DeviceOf<ExecutionSpaceT>> aggregateMembers, aggregateOf;
     matrix_type Ptent, Z, P, R, AP;
-    typename matrix_type::row_map_type::non_const_type transposeRowMap;  // R's row map
+    Transposition<ExecutionSpaceT> restriction;  // R = P^T: its pattern and gather map
+    belos::detail::BlockDiagnosisView<ExecutionSpaceT> blockDiagnoses;
     vector_type x, b, r, w;  // work vectors of this level's size
   };
 
@@ -434,6 +428,8 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
                                   level.A.graph.row_map, level.A.graph.entries);
       level.blockInverses = belos::detail::BlockInverseView<ExecutionSpaceT>(
           "perishell::amg::block_inverses_" + tag, numRows / dofPerNode, dofPerNode, dofPerNode);
+      level.blockDiagnoses = belos::detail::BlockDiagnosisView<ExecutionSpaceT>("perishell::amg::block_diagnoses_" + tag,
+                                                                                numRows / dofPerNode);
       level.r = vector_type("perishell::amg::r_" + tag, numRows);
       level.w = vector_type("perishell::amg::w_" + tag, numRows);
     }
@@ -448,11 +444,8 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     level.P = matrix_type("perishell::amg::p_" + tag, numRows, numCoarseRows, level.Z.nnz(),
                           typename matrix_type::values_type::non_const_type("perishell::amg::p_" + tag, level.Z.nnz()),
                           level.Z.graph.row_map, level.Z.graph.entries);
-    level.transposeRowMap = decltype(level.transposeRowMap)("perishell::amg::r_row_map_" + tag, numCoarseRows + 1);
-    level.R = matrix_type("perishell::amg::r_" + tag, numCoarseRows, numRows, level.Z.nnz(),
-                          typename matrix_type::values_type::non_const_type("perishell::amg::r_" + tag, level.Z.nnz()),
-                          level.transposeRowMap,
-                          typename matrix_type::index_type::non_const_type("perishell::amg::r_" + tag, level.Z.nnz()));
+    level.restriction = transposePattern(level.P, "perishell::amg::r_" + tag);
+    level.R = level.restriction.transpose;
     computeProlongator(l);
     level.AP = productPattern(level.A, level.P, "perishell::amg::ap_" + tag);
     levels_[l + 1].A = productPattern(level.R, level.AP, "perishell::amg::a_" + nextTag);
@@ -474,17 +467,14 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
   // Block inverses, D^-1 A, lambda_max and the QR of the near-null space.
   void computeFineNumerics(std::size_t l) {
     Level& level = levels_[l];
-    level.scaledA = matrix_type("perishell::amg::scaled_a", level.A.numRows(), level.A.numRows(), level.A.nnz(),
-                                level.scaledA.values, level.A.graph.row_map, level.A.graph.entries);
-    const belos::detail::BlockDiagnosisView<ExecutionSpaceT> diagnoses("perishell::amg::block_diagnoses",
-                                                                       level.blockInverses.extent(0));
-    const LocalIndex failed = belos::detail::invertDiagonalBlocks(level.A, dofPerNode, level.blockInverses, diagnoses);
+    const LocalIndex failed =
+        belos::detail::invertDiagonalBlocks(level.A, dofPerNode, level.blockInverses, level.blockDiagnoses);
     if (failed >= 0)
       belos::detail::throwFailedBlock<ExecutionSpaceT>(std::string(who) + " (level " + std::to_string(l) + ")", failed,
-                                                       dofPerNode, diagnoses);
+                                                       dofPerNode, level.blockDiagnoses);
     detail::scaleByBlockInverse(space_, level.blockInverses, level.A, level.scaledA.values);
     space_.fence();
-    level.lambdaMax = detail::largestEigenvalue(level.scaledA, options_.powerIterations);
+    level.lambdaMax = detail::largestEigenvalue(space_, level.scaledA, options_.powerIterations, level.w, level.r);
     if (!(level.lambdaMax > 0.0) || !std::isfinite(level.lambdaMax))
       throw std::runtime_error(std::string(who) + ": level " + std::to_string(l) +
                                ": the largest eigenvalue of D^-1 A is " + std::to_string(level.lambdaMax) +
@@ -499,8 +489,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     multiplyInto(space_, level.scaledA, level.Ptent, level.Z);
     const double omega = 4.0 / (3.0 * level.lambdaMax);
     detail::smoothProlongator(space_, level.aggregateOf, level.Ptent.values, level.Z, omega, level.P.values);
-    space_.fence();
-    detail::transposeInto(level.P, level.transposeRowMap, level.R);
+    transposeInto(space_, level.P, level.restriction);
   }
 
   // A_{l+1} = R (A P).

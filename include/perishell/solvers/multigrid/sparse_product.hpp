@@ -1,7 +1,7 @@
 #pragma once
-// Sparse matrix product C = A B for the Galerkin products of smoothed aggregation: the
-// pattern of C once per sparsity pattern on the host (like the aggregates), the values on the
-// device at every update, one thread per row of C and no atomics (a thread owns its row).
+// Sparse matrix product C = A B and transpose T = P^T for the Galerkin products of smoothed
+// aggregation: the patterns once per sparsity pattern on the host (like the aggregates), the
+// values on the device at every update, one thread per row or entry and no atomics.
 //
 // Kokkos Kernels 3.4's spgemm is not used: on the H100 (sm_90, CUDA 13) every device variant
 // (SPGEMM_KK, _KK_MEMORY, _KK_DENSE, _KK_LP, _KK_SPEED, _KK_MEMORY_SORTED) wrote out of bounds
@@ -91,6 +91,58 @@ void multiplyInto(const ExecutionSpaceT& space, const belos::CrsMatrix<Execution
           }
         }
       });
+}
+
+// P^T's pattern with rows sorted, and for each of its entries the index of the same entry in
+// P's values, so that the transposition at every update is a gather (transposeInto).
+template <class ExecutionSpaceT>
+struct Transposition {
+  belos::CrsMatrix<ExecutionSpaceT> transpose;
+  Kokkos::View<RowOffset*, typename belos::CrsMatrix<ExecutionSpaceT>::device_type> sourceEntry;
+};
+
+template <class ExecutionSpaceT>
+Transposition<ExecutionSpaceT> transposePattern(const belos::CrsMatrix<ExecutionSpaceT>& P, const std::string& label) {
+  using Matrix = belos::CrsMatrix<ExecutionSpaceT>;
+  const auto pRows = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, P.graph.row_map);
+  const auto pColumns = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, P.graph.entries);
+  const LocalIndex numRows = P.numCols();
+  typename Matrix::row_map_type::non_const_type rowMap(label + " row map", numRows + 1);
+  typename Matrix::index_type::non_const_type columns(label + " entries", P.nnz());
+  Transposition<ExecutionSpaceT> result;
+  result.sourceEntry = decltype(result.sourceEntry)(label + " source entries", P.nnz());
+  const auto hostRowMap = Kokkos::create_mirror_view(rowMap);
+  const auto hostColumns = Kokkos::create_mirror_view(columns);
+  const auto hostSource = Kokkos::create_mirror_view(result.sourceEntry);
+  Kokkos::deep_copy(hostRowMap, RowOffset(0));
+  for (RowOffset k = 0; k < P.nnz(); ++k) ++hostRowMap(pColumns(k) + 1);
+  for (LocalIndex row = 0; row < numRows; ++row) hostRowMap(row + 1) += hostRowMap(row);
+  std::vector<RowOffset> next(hostRowMap.data(), hostRowMap.data() + numRows);
+  // P's rows in ascending order, so every row of P^T comes out sorted.
+  for (LocalIndex pRow = 0; pRow < P.numRows(); ++pRow)
+    for (RowOffset k = pRows(pRow); k < pRows(pRow + 1); ++k) {
+      const RowOffset slot = next[pColumns(k)]++;
+      hostColumns(slot) = pRow;
+      hostSource(slot) = k;
+    }
+  Kokkos::deep_copy(rowMap, hostRowMap);
+  Kokkos::deep_copy(columns, hostColumns);
+  Kokkos::deep_copy(result.sourceEntry, hostSource);
+  typename Matrix::values_type::non_const_type values(label + " values", P.nnz());
+  result.transpose = Matrix(label, numRows, P.numRows(), P.nnz(), values, rowMap, columns);
+  return result;
+}
+
+// T's values = P's, for T from transposePattern(P).
+template <class ExecutionSpaceT>
+void transposeInto(const ExecutionSpaceT& space, const belos::CrsMatrix<ExecutionSpaceT>& P,
+                   const Transposition<ExecutionSpaceT>& T) {
+  const auto source = T.sourceEntry;
+  const auto from = P.values;
+  const auto to = T.transpose.values;
+  Kokkos::parallel_for(
+      "perishell::amg::transpose", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, source.extent(0)),
+      KOKKOS_LAMBDA(const RowOffset k) { to(k) = from(source(k)); });
 }
 
 }  // namespace perishell::multigrid
