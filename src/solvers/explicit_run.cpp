@@ -2,7 +2,7 @@
 #include <perishell/io/progress.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/nodal_loads.hpp>
-#include <perishell/pd/make_body.hpp>
+#include <perishell/coupling/make_coupled_model.hpp>
 #include <perishell/solvers/explicit/central_difference.hpp>
 #include <perishell/solvers/explicit/explicit_run.hpp>
 #include <perishell/solvers/model_actions.hpp>
@@ -27,20 +27,11 @@ constexpr double crackDamage = 0.4;
 
 void requireRunnableModel(const model::Model& model) {
   const auto& deck = model.deck;
-  if (model.numPdElements != model.shell.mesh.numElements())
-    throw std::invalid_argument(
-        deck.sourceName + ": zones: the explicit solver needs every element PD (zones.default: pd, no CCM "
-        "regions); this model has " + std::to_string(model.shell.mesh.numElements() - model.numPdElements) +
-        " CCM elements, and mixed PD-CCM models arrive with the coupling");
   for (const auto& load : deck.loads)
     if (load.follower)
       throw std::invalid_argument(deck.sourceName + ": loads." + load.name +
                                   ".follower: the explicit solver applies pressure in the reference direction "
                                   "only; set follower: false");
-}
-
-pd::PdMaterial pdMaterial(const deck::Material& material) {
-  return {material.youngModulus, material.poissonRatio, material.thickness, material.fractureEnergy};
 }
 
 const std::string& createdDirectory(const std::string& directory) {
@@ -232,8 +223,11 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
   const auto& settings = deck.solver.explicitSettings;
   const ExecutionSpace space;
   const auto setupStart = std::chrono::steady_clock::now();
-  auto body = pd::makePdBody(space, model.shell.mesh, model.pdNodes, pdMaterial(deck.material), model.horizon(),
-                             model.gridSpacing(), model.preCrackSegments());
+  // Bonds where alpha > 0, shell elements where the model is CCM or in the transition (model.md §4).
+  auto bodies = coupling::makeCoupledBodies(space, model);
+  const auto& body = bodies.pdBody;
+  std::optional<shell::ShellBody<Memory>> shellBody;
+  if (bodies.shellBody.numElements() > 0) shellBody = bodies.shellBody;
   ExplicitOptions options;
   options.density = deck.material.density;
   options.thickness = deck.material.thickness;
@@ -242,12 +236,13 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
   options.damping = settings.damping;
   options.forceKernel = deck.peridynamics.forceKernel;
   options.monitorEvery = std::min<long long>(100, deck.output.historyEvery);
-  CentralDifferenceSolver<ExecutionSpace> solver(space, body, makeExternalActions<Memory>(model), options);
+  CentralDifferenceSolver<ExecutionSpace> solver(space, body, shellBody, makeExternalActions<Memory>(model), options);
   const long long totalSteps =
       settings.steps ? *settings.steps
                      : std::max(1LL, static_cast<long long>(std::ceil(*settings.endTime / solver.timeStep() - 1e-9)));
   const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - setupStart).count();
-  log << "explicit: " << body.numNodes() << " PD nodes, " << body.bonds.numBonds() << " bonds on "
+  log << "explicit: " << bodies.pdNodes.extent(0) << " PD nodes, " << body.bonds.numBonds() << " bonds, "
+      << solver.numElements() << " shell elements on "
       << ExecutionSpace::name() << "; dt = " << solver.timeStep() << " s (critical estimate "
       << solver.criticalTimeStep() << " s), " << totalSteps << " steps to t = " << totalSteps * solver.timeStep()
       << " s; setup " << formatSeconds(setupSeconds) << "\n";

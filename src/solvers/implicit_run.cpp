@@ -15,11 +15,6 @@ namespace perishell::solvers {
 
 void requireImplicitModel(const model::Model& model) {
   const auto& deck = model.deck;
-  const LocalIndex numElements = model.shell.mesh.numElements();
-  if (model.numPdElements != 0 && model.numPdElements != numElements)
-    throw std::invalid_argument(deck.sourceName + ": zones: the implicit solver runs CCM-only or 100 % PD models; this one has " +
-                                std::to_string(model.numPdElements) + " PD of " + std::to_string(numElements) +
-                                " elements, and mixed PD-CCM models arrive with the coupling (model.md §4)");
   for (const auto& load : deck.loads)
     if (load.follower)
       throw std::invalid_argument(deck.sourceName + ": loads." + load.name +

@@ -105,41 +105,31 @@ Evaluation evaluate(const CoupledPlate& plate, const Field& field) {
     for (int d = 0; d < 3; ++d) u(node, d) = displacement[d];
     for (int d = 0; d < 4; ++d) q(node, d) = quaternion[d];
   }
-  // Shell kinematics over every mesh node; the PD body's gathered by pdNodes.
-  perishell::pd::PdKinematics<MemorySpace> shellState(numNodes);
-  Kokkos::deep_copy(shellState.displacements, u);
-  Kokkos::deep_copy(shellState.rotations, q);
+  // One state per mesh node serves both bodies (the PD body is indexed by mesh node).
+  perishell::pd::PdKinematics<MemorySpace> state(numNodes);
+  Kokkos::deep_copy(state.displacements, u);
+  Kokkos::deep_copy(state.rotations, q);
   perishell::pd::NodalVectorView<MemorySpace> shellForces("shell forces", numNodes);
   Evaluation result;
-  result.shellEnergy = shellEnergyAndForces(plate.bodies.shellBody, shellState, shellForces);
+  result.shellEnergy = shellEnergyAndForces(plate.bodies.shellBody, state, shellForces);
   result.internalForces = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, shellForces);
-
   const auto& body = plate.bodies.pdBody;
-  const auto& pdNodes = plate.bodies.pdNodes;
-  const LocalIndex numBodyNodes = body.numNodes();
-  perishell::CoordinateView<Kokkos::HostSpace> bodyU("body u", numBodyNodes);
-  perishell::pd::RotationView<Kokkos::HostSpace> bodyQ("body q", numBodyNodes);
-  for (LocalIndex k = 0; k < numBodyNodes; ++k) {
-    for (int d = 0; d < 3; ++d) bodyU(k, d) = u(pdNodes(k), d);
-    for (int d = 0; d < 4; ++d) bodyQ(k, d) = q(pdNodes(k), d);
-  }
-  perishell::pd::PdKinematics<MemorySpace> bodyState(numBodyNodes);
-  Kokkos::deep_copy(bodyState.displacements, bodyU);
-  Kokkos::deep_copy(bodyState.rotations, bodyQ);
+  if (body.bonds.numBonds() == 0) return result;
+
   const auto intact = perishell::pd::makeIntactFlags(body.bonds, "intact");
   perishell::pd::BondForceOutputs<MemorySpace> out{
-      perishell::pd::NodalVectorView<MemorySpace>("pd forces", numBodyNodes),
-      perishell::VectorView<MemorySpace>("pd energy", numBodyNodes),
-      perishell::VectorView<MemorySpace>("pd fracture", numBodyNodes),
+      perishell::pd::NodalVectorView<MemorySpace>("pd forces", numNodes),
+      perishell::VectorView<MemorySpace>("pd energy", numNodes),
+      perishell::VectorView<MemorySpace>("pd fracture", numNodes),
       perishell::pd::BondFlagView<MemorySpace>("intact next", body.bonds.numBonds())};
-  perishell::pd::computeBondForces(TEST_EXECSPACE{}, perishell::deck::ForceKernel::NodeGather, body, bodyState, intact,
+  perishell::pd::computeBondForces(TEST_EXECSPACE{}, perishell::deck::ForceKernel::NodeGather, body, state, intact,
                                    out);
   const auto pdForces = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, out.forces);
   const auto pdEnergy = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, out.strainEnergy);
-  for (LocalIndex k = 0; k < numBodyNodes; ++k) {
-    result.pdEnergy += pdEnergy(k);
+  for (LocalIndex node = 0; node < numNodes; ++node) {
+    result.pdEnergy += pdEnergy(node);
     // The bond kernel returns the forces bonds exert on the nodes: minus their internal forces.
-    for (int d = 0; d < 6; ++d) result.internalForces(pdNodes(k), d) -= pdForces(k, d);
+    for (int d = 0; d < 6; ++d) result.internalForces(node, d) -= pdForces(node, d);
   }
   return result;
 }
@@ -259,17 +249,37 @@ TEST(TEST_CATEGORY, morphing_alpha_field_follows_the_profile) {
     EXPECT_DOUBLE_EQ(perishell::coupling::transitionProfile(profile, 0.0), 1.0);
     EXPECT_DOUBLE_EQ(perishell::coupling::transitionProfile(profile, 1.0), 0.0);
   }
-  // The PD body is every node with alpha > 0. A band 10 elements wide (x in [13, 23] mm):
+  // The bond carriers are the nodes with alpha > 0. A band 10 elements wide (x in [13, 23] mm):
   // its nodes at least delta = 3 mm inside (x = 16..20 mm) bond only to alpha = 1 nodes, so
   // alphaBar = 1 there and the 4 x 36 elements between them are pure PD, without a shell element.
   const auto plate = makeCoupledPlate(0.2, TransitionProfile::Cubic, Zone::Band, 0.0, 5.0 * spacing);
   const auto alpha = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, plate.bodies.alpha);
   LocalIndex positive = 0;
   for (std::size_t node = 0; node < alpha.extent(0); ++node) positive += alpha(node) > 0.0;
-  EXPECT_EQ(plate.bodies.pdBody.numNodes(), positive);
+  EXPECT_EQ(LocalIndex(plate.bodies.pdNodes.extent(0)), positive);
   // Band nodes x = 13..23 mm (11 columns) and the transition out to < 6 mm each side (5 columns each).
   EXPECT_EQ(positive, 37 * (11 + 2 * 5));
   for (LocalIndex k = 0; k < positive; ++k) EXPECT_GT(alpha(plate.bodies.pdNodes(k)), 0.0);
+  // The body is indexed by mesh node: exactly the nodes with alpha > 0 hold bonds, every
+  // bond joins two of them, and each node's geometry is its mesh node's.
+  const auto& body = plate.bodies.pdBody;
+  ASSERT_EQ(body.numNodes(), plate.shell.mesh.numNodes());
+  const auto offsets = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.bonds.offsets);
+  const auto neighbours = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.bonds.neighbours);
+  const auto halfBonds = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.bonds.halfBonds);
+  const auto positions = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.referencePositions);
+  const auto length = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.bonds.referenceLength);
+  for (LocalIndex node = 0; node < body.numNodes(); ++node) {
+    EXPECT_EQ(offsets(node + 1) > offsets(node), alpha(node) > 0.0) << "node " << node;
+    for (int d = 0; d < 3; ++d) EXPECT_EQ(positions(node, d), plate.shell.mesh.coordinates(node, d));
+    for (auto entry = offsets(node); entry < offsets(node + 1); ++entry) EXPECT_GT(alpha(neighbours(entry)), 0.0);
+  }
+  for (std::size_t b = 0; b < halfBonds.extent(0); ++b) {
+    double squared = 0.0;
+    for (int d = 0; d < 3; ++d)
+      squared += std::pow(positions(halfBonds(b, 1), d) - positions(halfBonds(b, 0), d), 2);
+    EXPECT_NEAR(std::sqrt(squared), length(b), 1e-12 * spacing) << "bond " << b;
+  }
   EXPECT_EQ(plate.bodies.ccmElements.size(), std::size_t(cells * cells - 4 * cells));
   EXPECT_EQ(plate.bodies.shellBody.numElements(), LocalIndex(plate.bodies.ccmElements.size()));
 }
@@ -282,7 +292,9 @@ TEST(TEST_CATEGORY, morphing_degenerates_to_pure_models) {
   EXPECT_TRUE(pd.bodies.ccmElements.empty());
   // 0 % PD, nu > 1/3 (legal without PD): no bond carrier, every element with the full section.
   CoupledPlate ccm = makeCoupledPlate(0.4, TransitionProfile::Cubic, Zone::Band, 0.0, 0.0);
-  EXPECT_EQ(ccm.bodies.pdBody.numNodes(), 0);
+  EXPECT_EQ(ccm.bodies.pdNodes.extent(0), 0u);
+  EXPECT_EQ(ccm.bodies.pdBody.numNodes(), ccm.shell.mesh.numNodes());
+  EXPECT_EQ(ccm.bodies.pdBody.bonds.numBonds(), 0u);
   EXPECT_EQ(ccm.bodies.ccmElements.size(), std::size_t(cells * cells));
   const auto scale = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, ccm.bodies.shellBody.membraneBendingScale);
   for (std::size_t e = 0; e < scale.extent(0); ++e)

@@ -4,6 +4,7 @@
 #include <perishell/mesh/generators.hpp>
 #include <perishell/pd/make_body.hpp>
 #include <perishell/solvers/explicit/central_difference.hpp>
+#include <solvers/pushed_edge.hpp>
 
 #include <cmath>
 #include <functional>
@@ -115,26 +116,7 @@ TEST(TEST_CATEGORY, explicit_plane_wave_travels_at_the_plate_wave_speed) {
   // Uniaxial strain: u_y = 0 everywhere, so the front moves at sqrt(E / (rho (1 - nu^2))).
   // The left edge is pushed at a constant speed v0 (a ramp of its displacement).
   const double pushSpeed = 0.1, rampTime = 1.0;
-  auto actions = perishell::solvers::makeFreeActions<TEST_MEMSPACE>(numNodes);
-  auto constrained = Kokkos::create_mirror_view(actions.constrainedDofs);
-  auto value = Kokkos::create_mirror_view(actions.prescribedValue);
-  auto curveIndex = Kokkos::create_mirror_view(actions.supportCurveIndex);
-  Kokkos::deep_copy(curveIndex, std::int8_t(-1));
-  for (LocalIndex node = 0; node < numNodes; ++node) {
-    constrained(node) = 0b111110;  // everything but u_x
-    if (plate.shell.mesh.coordinates(node, 0) < 0.5 * plate.spacing) {
-      constrained(node) = 0b111111;
-      value(node, 0) = pushSpeed * rampTime;
-      curveIndex(node, 0) = 0;
-    }
-  }
-  Kokkos::deep_copy(actions.constrainedDofs, constrained);
-  Kokkos::deep_copy(actions.prescribedValue, value);
-  Kokkos::deep_copy(actions.supportCurveIndex, curveIndex);
-  perishell::deck::Curve ramp;
-  ramp.type = perishell::deck::CurveType::Ramp;
-  ramp.endTime = rampTime;
-  actions.supportCurves = {ramp};
+  const auto actions = pushedEdgeActions<TEST_MEMSPACE>(plate.shell.mesh, 0.5 * plate.spacing, pushSpeed, rampTime);
   Solver<TEST_EXECSPACE> solver(TEST_EXECSPACE{}, body, actions, optionsFor(plate));
 
   // Arrival time of the front (half the push speed) at two stations on the centre line.

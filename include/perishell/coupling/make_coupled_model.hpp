@@ -19,11 +19,26 @@
 namespace perishell::coupling {
 
 template <class MemorySpaceT>
+pd::PdBody<MemorySpaceT> emptyPdBody() {
+  pd::PdBody<MemorySpaceT> body;
+  body.referencePositions = CoordinateView<MemorySpaceT>("pd reference positions", 0);
+  body.bonds.offsets = Kokkos::View<RowOffset*, MemorySpaceT>("pd offsets", 1);
+  body.bonds.neighbours = Kokkos::View<LocalIndex*, MemorySpaceT>("pd neighbours", 0);
+  body.bonds.fullToHalf = Kokkos::View<RowOffset*, MemorySpaceT>("pd full to half", 0);
+  body.bonds.halfBonds = Kokkos::View<LocalIndex* [2], Kokkos::LayoutRight, MemorySpaceT>("pd half bonds", 0);
+  body.bonds.referenceLength = Kokkos::View<double*, MemorySpaceT>("pd reference length", 0);
+  body.bonds.volumeFactor = Kokkos::View<double*, MemorySpaceT>("pd volume factor", 0);
+  body.stiffnessScale = Kokkos::View<double* [2], Kokkos::LayoutRight, MemorySpaceT>("pd stiffness scale", 0);
+  return body;
+}
+
+template <class MemorySpaceT>
 struct CoupledBodies {
   VectorView<MemorySpaceT> alpha;     // per mesh node
   VectorView<MemorySpaceT> alphaBar;  // per mesh node: the bonds' share of the energy (0 off the PD body)
-  // PD body node k is mesh node pdNodes(k): the nodes with alpha > 0, ascending.
+  // The bond carriers: the mesh nodes with alpha > 0, ascending.
   Kokkos::View<LocalIndex*, Kokkos::HostSpace> pdNodes;
+  // Indexed by mesh node (pd::indexByMeshNodes): only pdNodes hold bonds (none at 0 % PD).
   pd::PdBody<MemorySpaceT> pdBody;
   // Shell body element k is mesh element ccmElements[k]: the elements with alphaBar < 1 at some node.
   std::vector<LocalIndex> ccmElements;
@@ -81,7 +96,7 @@ CoupledBodies<typename ExecutionSpaceT::memory_space> makeCoupledBodies(
     bodies.pdBody = pd::makePdBody(space, hostMesh, bodies.pdNodes, inputs.material, inputs.horizon,
                                    inputs.gridSpacing, inputs.preCracks);
   else
-    bodies.pdBody.referencePositions = CoordinateView<MemorySpaceT>("pd reference positions", 0);
+    bodies.pdBody = emptyPdBody<MemorySpaceT>();
 
   const auto bodyNodes = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, bodies.pdNodes);
   VectorView<MemorySpaceT> bodyAlpha("coupling pd body alpha", numBodyNodes);
@@ -96,6 +111,7 @@ CoupledBodies<typename ExecutionSpaceT::memory_space> makeCoupledBodies(
   Kokkos::parallel_for(
       "perishell::coupling::scatterAlphaBar", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numBodyNodes),
       KOKKOS_LAMBDA(const LocalIndex k) { alphaBar(bodyNodes(k)) = bodyAlphaBar(k); });
+  bodies.pdBody = pd::indexByMeshNodes(space, bodies.pdBody, hostMesh, bodies.pdNodes, inputs.material.thickness);
 
   // CCM elements: all but the pure PD ones (alphaBar = 1 at every node, to round-off).
   const auto hostAlphaBar = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, bodies.alphaBar);

@@ -9,6 +9,8 @@
 #include <perishell/pd/pd_body.hpp>
 
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace perishell::pd {
@@ -228,6 +230,57 @@ PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
       });
   computeStiffnessScales(space, body, horizon, material.thickness);
   return body;
+}
+
+// The same body indexed by mesh node: node k of the result is mesh node k, and the mesh
+// nodes outside pdNodes (ascending) hold no bonds but keep their volume and normal. Solvers
+// that keep one state per mesh node (mixed PD-CCM models, model.md §4) pass it to the bond
+// kernels unchanged. Since pdNodes ascends, the neighbour entries keep their order: only
+// node numbers and row offsets change, and the per-bond arrays are shared.
+template <class ExecutionSpaceT>
+PdBody<typename ExecutionSpaceT::memory_space> indexByMeshNodes(
+    const ExecutionSpaceT& space, const PdBody<typename ExecutionSpaceT::memory_space>& body,
+    const mesh::HostQuadMesh& hostMesh, const Kokkos::View<const LocalIndex*, Kokkos::HostSpace>& pdNodes,
+    double thickness) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  using MemorySpaceT = typename ExecutionSpaceT::memory_space;
+  const LocalIndex numMeshNodes = hostMesh.numNodes();
+  const auto numPdNodes = static_cast<LocalIndex>(pdNodes.extent(0));
+  if (body.numNodes() != numPdNodes)
+    throw std::invalid_argument("indexByMeshNodes: the body has " + std::to_string(body.numNodes()) +
+                                " nodes, pdNodes " + std::to_string(numPdNodes));
+  PdBody<MemorySpaceT> meshBody = body;
+  const auto meshOnDevice = mesh::mirrorTo<MemorySpaceT>(hostMesh);
+  meshBody.referencePositions = meshOnDevice.coordinates;
+  meshBody.referenceNormals = mesh::computeNodeNormals(space, meshOnDevice);
+  meshBody.volumes = mesh::computeNodeVolumes(space, meshOnDevice, thickness);
+
+  // Row offsets: mesh node m starts where the first PD node >= m started (setup-time host pass).
+  const auto oldOffsets = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.bonds.offsets);
+  Kokkos::View<RowOffset*, Kokkos::HostSpace> offsets("pd mesh-indexed offsets", numMeshNodes + 1);
+  for (LocalIndex m = 0, k = 0; m <= numMeshNodes; ++m) {
+    while (k < numPdNodes && pdNodes(k) < m) ++k;
+    offsets(m) = oldOffsets(k);
+  }
+  meshBody.bonds.offsets = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, offsets);
+
+  const auto nodes = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, pdNodes);
+  const auto oldNeighbours = body.bonds.neighbours;
+  const auto oldHalfBonds = body.bonds.halfBonds;
+  const auto neighbours = meshBody.bonds.neighbours =
+      Kokkos::View<LocalIndex*, MemorySpaceT>("pd mesh-indexed neighbours", oldNeighbours.extent(0));
+  const auto halfBonds = meshBody.bonds.halfBonds = Kokkos::View<LocalIndex* [2], Kokkos::LayoutRight, MemorySpaceT>(
+      "pd mesh-indexed half bonds", oldHalfBonds.extent(0));
+  Kokkos::parallel_for(
+      "perishell::pd::indexByMeshNodes::neighbours", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, neighbours.extent(0)),
+      KOKKOS_LAMBDA(const RowOffset entry) { neighbours(entry) = nodes(oldNeighbours(entry)); });
+  Kokkos::parallel_for(
+      "perishell::pd::indexByMeshNodes::halfBonds", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, halfBonds.extent(0)),
+      KOKKOS_LAMBDA(const RowOffset b) {
+        halfBonds(b, 0) = nodes(oldHalfBonds(b, 0));
+        halfBonds(b, 1) = nodes(oldHalfBonds(b, 1));
+      });
+  return meshBody;
 }
 
 // Every node of the mesh, for 100 % PD models.

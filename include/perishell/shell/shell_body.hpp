@@ -108,11 +108,14 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(const ExecutionS
 }
 
 // forces -= internal forces of every element (the caller's forces are the loads acting on
-// the nodes, so the result is the out-of-balance force).
+// the nodes, so the result is the out-of-balance force). With a non-empty energy view, each
+// element's energy W = 1/2 d^T K_l d is also added to it, a quarter per node.
 template <class ExecutionSpaceT, class MemorySpaceT>
 void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
-                         const pd::PdKinematics<MemorySpaceT>& state, const pd::NodalVectorView<MemorySpaceT>& forces) {
+                         const pd::PdKinematics<MemorySpaceT>& state, const pd::NodalVectorView<MemorySpaceT>& forces,
+                         const VectorView<MemorySpaceT>& energy = {}) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
+  const bool withEnergy = energy.extent(0) > 0;
   Kokkos::parallel_for(
       "perishell::shell::subtractShellForces", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numElements()),
       KOKKOS_LAMBDA(const LocalIndex e) {
@@ -120,9 +123,33 @@ void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpa
         detail::loadElement(body, state, e, reference, current, rotations);
         for (int r = 0; r < 24; ++r)
           for (int s = 0; s < 24; ++s) localStiffness[r][s] = body.localStiffness(e, r, s);
-        shellInternalForce(reference, current, rotations, localStiffness, force);
-        for (int a = 0; a < 4; ++a)
+        const double elementEnergy = shellInternalForce(reference, current, rotations, localStiffness, force);
+        for (int a = 0; a < 4; ++a) {
           for (int d = 0; d < 6; ++d) Kokkos::atomic_add(&forces(body.quads(e, a), d), -force[6 * a + d]);
+          if (withEnergy) Kokkos::atomic_add(&energy(body.quads(e, a)), 0.25 * elementEnergy);
+        }
+      });
+}
+
+// Per node, the elements' diagonal stiffness: the mean of the three translational and of the
+// three rotational diagonal entries of K_l, summed over the node's elements (for the
+// explicit solver's rotary-inertia scaling, solvers/explicit/nodal_inertia.hpp).
+template <class ExecutionSpaceT, class MemorySpaceT>
+void addShellNodalStiffness(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
+                            const VectorView<MemorySpaceT>& translational, const VectorView<MemorySpaceT>& rotational) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  Kokkos::parallel_for(
+      "perishell::shell::addShellNodalStiffness", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numElements()),
+      KOKKOS_LAMBDA(const LocalIndex e) {
+        for (int a = 0; a < 4; ++a) {
+          double moving = 0.0, turning = 0.0;
+          for (int d = 0; d < 3; ++d) {
+            moving += body.localStiffness(e, 6 * a + d, 6 * a + d) / 3.0;
+            turning += body.localStiffness(e, 6 * a + 3 + d, 6 * a + 3 + d) / 3.0;
+          }
+          Kokkos::atomic_add(&translational(body.quads(e, a)), moving);
+          Kokkos::atomic_add(&rotational(body.quads(e, a)), turning);
+        }
       });
 }
 

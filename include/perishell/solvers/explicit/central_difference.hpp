@@ -1,9 +1,11 @@
 #pragma once
-// Explicit dynamics of a PD shell body by central differences (model.md §6, paper eq. 44-53),
-// as leapfrog: velocities live at half steps, displacements and forces at whole steps;
+// Explicit dynamics of a shell by central differences (model.md §6, paper eq. 44-53), as
+// leapfrog: velocities live at half steps, displacements and forces at whole steps;
 // rotations are finite and updated multiplicatively, q <- exp(dt omega) q (model.md §5).
-// Each step is two kernels, both one thread per node (or per bond): the bond force kernel
-// (pd/bond_forces.hpp) and the nodal update below; all state stays on the device.
+// The forces come from PD bonds (pd/bond_forces.hpp, one thread per bond or node) and, in a
+// mixed PD-CCM model, from shell elements (shell/shell_body.hpp, one thread per element),
+// both on one state per mesh node; the nodal update below is one thread per node. All
+// state stays on the device.
 //
 // The run watches itself every monitorEvery steps: the energy balance
 //   kinetic + strain + fracture + damping = initial energy + work of loads and supports
@@ -14,8 +16,10 @@
 #include <perishell/pd/bond_forces.hpp>
 #include <perishell/solvers/explicit/external_actions.hpp>
 #include <perishell/solvers/explicit/nodal_inertia.hpp>
+#include <perishell/shell/shell_body.hpp>
 
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -63,8 +67,16 @@ class CentralDifferenceSolver {
 
   CentralDifferenceSolver(const ExecutionSpaceT& space, pd::PdBody<MemorySpace> body,
                           ExternalActions<MemorySpace> actions, const ExplicitOptions& options)
+      : CentralDifferenceSolver(space, std::move(body), std::nullopt, std::move(actions), options) {}
+
+  // A mixed model: the PD body indexed by mesh node (pd::indexByMeshNodes; it may have no
+  // bonds) and the shell elements (coupling/make_coupled_model.hpp builds both).
+  CentralDifferenceSolver(const ExecutionSpaceT& space, pd::PdBody<MemorySpace> body,
+                          std::optional<shell::ShellBody<MemorySpace>> shellBody, ExternalActions<MemorySpace> actions,
+                          const ExplicitOptions& options)
       : space_(space),
         body_(std::move(body)),
+        shell_(std::move(shellBody)),
         actions_(std::move(actions)),
         options_(options),
         state_(body_.numNodes()),
@@ -79,7 +91,7 @@ class CentralDifferenceSolver {
         dampingWork_("pd damping work", body_.numNodes()),
         kineticEnergy_("pd kinetic energy", body_.numNodes()) {
     validate();
-    inertia_ = computeNodalInertia(space_, body_, options_.density, options_.thickness);
+    inertia_ = computeNodalInertia(space_, body_, shell_, options_.density, options_.thickness);
     applyInitialSupportValues();
     criticalTimeStep_ = estimateCriticalTimeStep();
     timeStep_ = options_.timeStep > 0.0 ? options_.timeStep : options_.safetyFactor * criticalTimeStep_;
@@ -112,8 +124,10 @@ class CentralDifferenceSolver {
       discardedFracture_ = VectorView<MemorySpace>("pd fracture energy scratch", body_.numNodes());
       discardedFlags_ = pd::BondFlagView<MemorySpace>("intact bonds scratch", body_.bonds.numBonds());
     }
-    pd::computeBondForces(space_, options_.forceKernel, body_, state_, intact_,
-                          pd::BondForceOutputs<MemorySpace>{forces_, strainEnergy_, discardedFracture_, discardedFlags_});
+    if (body_.bonds.numBonds() > 0)
+      pd::computeBondForces(space_, options_.forceKernel, body_, state_, intact_,
+                            pd::BondForceOutputs<MemorySpace>{forces_, strainEnergy_, discardedFracture_, discardedFlags_});
+    if (shell_) shell::subtractShellForces(space_, *shell_, state_, forces_, strainEnergy_);
     return reduceEnergies(kineticAtHalfSteps());
   }
 
@@ -123,6 +137,7 @@ class CentralDifferenceSolver {
   double criticalTimeStep() const { return criticalTimeStep_; }
   const EnergyReport& lastEnergyReport() const { return lastReport_; }
   const pd::PdBody<MemorySpace>& body() const { return body_; }
+  LocalIndex numElements() const { return shell_ ? shell_->numElements() : 0; }
   const pd::PdKinematics<MemorySpace>& kinematics() const { return state_; }
   const pd::NodalVectorView<MemorySpace>& velocities() const { return velocities_; }
   const pd::NodalVectorView<MemorySpace>& forces() const { return forces_; }
@@ -143,7 +158,8 @@ class CentralDifferenceSolver {
         static_cast<int>(actions_.supportCurves.size()) > maxCurvesPerKind)
       throw std::invalid_argument("explicit solver: at most " + std::to_string(maxCurvesPerKind) +
                                   " distinct load curves and support curves each");
-    if (body_.bonds.numBonds() == 0) throw std::invalid_argument("explicit solver: the PD body has no bonds");
+    if (body_.bonds.numBonds() == 0 && !shell_)
+      throw std::invalid_argument("explicit solver: the model has neither PD bonds nor shell elements");
     double smallestVolume = 0.0;
     const auto volumes = body_.volumes;
     Kokkos::parallel_reduce(
@@ -154,7 +170,7 @@ class CentralDifferenceSolver {
         },
         Kokkos::Min<double>(smallestVolume));
     if (!(smallestVolume > 0.0))
-      throw std::invalid_argument("explicit solver: a PD node has zero (or non-finite) volume");
+      throw std::invalid_argument("explicit solver: a node has zero (or non-finite) volume");
   }
 
   // Prescribed values hold from t = 0 on: u_0 = value x curve(0).
@@ -186,7 +202,10 @@ class CentralDifferenceSolver {
     if (withStrainEnergy) Kokkos::deep_copy(space_, strainEnergy_, 0.0);
     const pd::BondForceOutputs<MemorySpace> outputs{
         forces_, withStrainEnergy ? strainEnergy_ : VectorView<MemorySpace>(), fractureEnergy_, intactNext_};
-    pd::computeBondForces(space_, options_.forceKernel, body_, state_, intact_, outputs);
+    if (body_.bonds.numBonds() > 0) pd::computeBondForces(space_, options_.forceKernel, body_, state_, intact_, outputs);
+    if (shell_)
+      shell::subtractShellForces(space_, *shell_, state_, forces_,
+                                 withStrainEnergy ? strainEnergy_ : VectorView<MemorySpace>());
   }
 
   // The leapfrog update of one node's six DOFs; work and dissipation accumulate per node
@@ -315,8 +334,8 @@ class CentralDifferenceSolver {
   }
 
   // dt_crit = 2 / omega_max, omega_max^2 the largest eigenvalue of M^-1/2 K M^-1/2 with K the
-  // tangent of the bond forces at the reference state. Power iteration: each product is a
-  // bond force evaluation at a tiny trial state y/sqrt(M) (amplitude 1e-7 of the horizon),
+  // tangent of the bond and element forces at the reference state. Power iteration: each product is a
+  // force evaluation at a tiny trial state y/sqrt(M) (amplitude 1e-7 of the horizon),
   // the Rayleigh quotient approaches omega_max^2 from below and converges fast because the
   // top of a lattice spectrum is dense.
   double estimateCriticalTimeStep(int iterations = 80) {
@@ -341,7 +360,7 @@ class CentralDifferenceSolver {
           }
         });
     const double amplitude = 1e-7;
-    const double horizonLength = maxReferenceLength();
+    const double horizonLength = characteristicLength();
     double eigenvalue = 0.0;
     for (int iteration = 0; iteration < iterations; ++iteration) {
       // Scale so that the largest trial displacement is amplitude x horizon, the largest rotation amplitude.
@@ -373,7 +392,8 @@ class CentralDifferenceSolver {
           });
       Kokkos::deep_copy(space_, trialForces, 0.0);
       const pd::BondForceOutputs<MemorySpace> outputs{trialForces, VectorView<MemorySpace>(), scratchEnergy, scratchIntact};
-      pd::computeBondForces(space_, options_.forceKernel, body_, trial, intact_, outputs);
+      if (body_.bonds.numBonds() > 0) pd::computeBondForces(space_, options_.forceKernel, body_, trial, intact_, outputs);
+      if (shell_) shell::subtractShellForces(space_, *shell_, trial, trialForces);
       // product = M^-1/2 K M^-1/2 direction = -M^-1/2 f / epsilon; Rayleigh quotient and next direction.
       Kokkos::parallel_for(
           "perishell::solvers::CentralDifferenceSolver::powerIterationProduct",
@@ -420,6 +440,21 @@ class CentralDifferenceSolver {
     return total;
   }
 
+  // The longest bond, or without bonds the side of the largest node area: the length trial
+  // displacements are scaled by.
+  double characteristicLength() const {
+    double largestVolume = 0.0;
+    const auto volumes = body_.volumes;
+    Kokkos::parallel_reduce(
+        "perishell::solvers::CentralDifferenceSolver::largestVolume",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, volumes.extent(0)),
+        KOKKOS_LAMBDA(const LocalIndex node, double& maximum) {
+          if (volumes(node) > maximum) maximum = volumes(node);
+        },
+        Kokkos::Max<double>(largestVolume));
+    return std::max(maxReferenceLength(), std::sqrt(largestVolume / options_.thickness));
+  }
+
   double maxReferenceLength() const {
     double longest = 0.0;
     const auto lengths = body_.bonds.referenceLength;
@@ -436,6 +471,7 @@ class CentralDifferenceSolver {
  private:
   ExecutionSpaceT space_;
   pd::PdBody<MemorySpace> body_;
+  std::optional<shell::ShellBody<MemorySpace>> shell_;
   ExternalActions<MemorySpace> actions_;
   ExplicitOptions options_;
   pd::PdKinematics<MemorySpace> state_;

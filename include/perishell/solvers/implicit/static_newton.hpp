@@ -113,7 +113,7 @@ class StaticNewtonSolver {
   using Matrix = belos::CrsMatrix<ExecutionSpaceT>;
 
   // Either body may be empty (no elements / no PD nodes). The PD body's node k must be mesh
-  // node k (the whole mesh is PD, or the shell body is empty).
+  // node k (pd::indexByMeshNodes; coupling/make_coupled_model.hpp builds both bodies).
   StaticNewtonSolver(const ExecutionSpaceT& space, LocalIndex numNodes, std::optional<shell::ShellBody<Memory>> shellBody,
                      std::optional<pd::PdBody<Memory>> pdBody, ExternalActions<Memory> actions,
                      const NewtonOptions& options)

@@ -1,8 +1,9 @@
 #pragma once
-// The Newton solver of an implicit deck's model: shell elements (CCM-only model) or PD bonds
-// (100 % PD), loads and supports on the device, the deck's Newton settings.
+// The Newton solver of an implicit deck's model: shell elements and PD bonds coupled by the
+// morphing field (coupling/make_coupled_model.hpp; CCM-only and 100 % PD are its end
+// cases), loads and supports on the device, the deck's Newton settings.
+#include <perishell/coupling/make_coupled_model.hpp>
 #include <perishell/model/model.hpp>
-#include <perishell/pd/make_body.hpp>
 #include <perishell/solvers/implicit/static_newton.hpp>
 #include <perishell/solvers/model_actions.hpp>
 
@@ -11,7 +12,7 @@
 namespace perishell::solvers {
 
 // Throws std::invalid_argument naming the deck key for what the implicit solver cannot run:
-// mixed PD-CCM models (they need the coupling of model.md §4), follower pressure.
+// follower pressure.
 void requireImplicitModel(const model::Model& model);
 
 // Whether any load pattern has a moment component (checked once, at set-up).
@@ -29,23 +30,13 @@ StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& spac
   requireImplicitModel(model);
   using Memory = typename ExecutionSpaceT::memory_space;
   const auto& deck = model.deck;
-  const auto& material = deck.material;
   const auto& settings = deck.solver.implicitSettings;
+  // Shell elements where the model is CCM or in the transition, bonds where alpha > 0 (model.md §4).
+  auto bodies = coupling::makeCoupledBodies(space, model);
   std::optional<shell::ShellBody<Memory>> shellBody;
   std::optional<pd::PdBody<Memory>> pdBody;
-  if (model.numPdElements == 0) {
-    std::vector<LocalIndex> elements(model.shell.mesh.numElements());
-    for (LocalIndex e = 0; e < model.shell.mesh.numElements(); ++e) elements[e] = e;
-    shell::ShellSection section;
-    section.youngModulus = material.youngModulus;
-    section.poissonRatio = material.poissonRatio;
-    section.thickness = material.thickness;
-    shellBody = shell::makeShellBody(space, model.shell.mesh, elements, section);
-  } else {
-    pdBody = pd::makePdBody(space, model.shell.mesh, model.pdNodes,
-                            {material.youngModulus, material.poissonRatio, material.thickness, material.fractureEnergy},
-                            model.horizon(), model.gridSpacing(), model.preCrackSegments());
-  }
+  if (bodies.shellBody.numElements() > 0) shellBody = std::move(bodies.shellBody);
+  if (bodies.pdNodes.extent(0) > 0) pdBody = std::move(bodies.pdBody);
   NewtonOptions options;
   options.maxIterations = settings.maxIterations;
   options.tolerance = settings.tolerance;

@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# Run time against PD ratio (the paper's Figs. 18 and 21): runs one paper deck with its PD
+# zone grown to each ratio and writes ratio, counts, run time (process wall time, set-up
+# and output included), time per increment or step, and the result (pressed: largest
+# displacement [m]; steel: broken bonds) to a CSV.
+#
+#   perf/pd_ratio_sweep.sh APP CASE OUT.csv [STEPS]
+#
+# APP   the perishell executable of the build to measure (OpenMP or CUDA preset)
+# CASE  pressed  - 4.2.1 pressed plate (implicit), ratios 0, 0.25, 0.5, 0.75, 1; the zone
+#                  grows from the middle of the clamped edge (apps/cases/pressed_plate_4_2_1.yaml)
+#       steel    - 4.2.2 steel plate (explicit), ratios 0.25, 0.5, 0.75, 1 (its pre-crack must
+#                  lie in PD); the zone grows from the crack centre
+# STEPS explicit only: stop after this many steps (the load ramp is unchanged), to time
+#       the per-step cost on a slow backend; default the deck's 50,000.
+# Each run's full log is kept next to the CSV (OUT.csv.ratio-R.log).
+set -euo pipefail
+if [[ $# -lt 3 ]]; then
+  sed -n '2,17p' "$0" >&2
+  exit 2
+fi
+app=$1 case=$2 csv=$3 steps=${4:-}
+cases="$(cd "$(dirname "${BASH_SOURCE[0]}")/../apps/cases" && pwd)"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+case $case in
+  pressed) base=$cases/pressed_plate_4_2_1.yaml ratios="0 0.25 0.5 0.75 1" ;;
+  steel) base=$cases/steel_plate_4_2_2.yaml ratios="0.25 0.5 0.75 1" ;;
+  *) echo "pd_ratio_sweep: unknown case '$case' (pressed or steel)" >&2; exit 2 ;;
+esac
+
+# The deck at one ratio, from the base deck's zones block.
+deck_for() {
+  local ratio=$1 deck=$work/deck-$1.yaml
+  case $case in
+    pressed)
+      sed -e "s/^      target: 0.5$/      target: $ratio/" "$base" > "$deck"
+      grep -q "target: $ratio\$" "$deck" || { echo "pd_ratio_sweep: $base has no 'target: 0.5' line" >&2; exit 1; } ;;
+    steel)
+      sed -e "s/^    default: pd$/    default: ccm\n    pd-ratio: {target: $ratio, around: {crack-centre: [0.1015, 0.1015, 0.0]}}/" \
+        "$base" > "$deck"
+      grep -q "pd-ratio: {target: $ratio" "$deck" || { echo "pd_ratio_sweep: $base has no 'default: pd' line" >&2; exit 1; }
+      if [[ -n $steps ]]; then sed -i -e "s/^    steps: 50000$/    steps: $steps/" "$deck"; fi ;;
+  esac
+  echo "$deck"
+}
+
+echo "case,ratio,pd_ratio_percent,shell_elements,bonds,run_seconds,per_step_seconds,result" > "$csv.tmp"
+for ratio in $ratios; do
+  deck=$(deck_for "$ratio")
+  log=$csv.ratio-$ratio.log
+  start=$(date +%s.%N)
+  "$app" run "$deck" --output "$work/out-$ratio" > "$log" 2>&1 || { echo "pd_ratio_sweep: ratio $ratio failed, see $log" >&2; exit 1; }
+  seconds=$(python3 -c "import sys; print(f'{float(sys.argv[2]) - float(sys.argv[1]):.3f}')" "$start" "$(date +%s.%N)")
+  percent=$(grep -o 'PD ratio [0-9.]* %' "$log" | head -1 | grep -o '[0-9.]*')
+  if [[ $case == pressed ]]; then
+    shells=$(grep -o 'implicit: [0-9]* shell elements' "$log" | grep -o '[0-9]*')
+    bonds=$(grep -o 'shell elements, [0-9]* bonds' "$log" | grep -o '[0-9]*')
+    per_step=$(awk '/^  increments/ {print $2}' "$log" | head -1)
+    per_step=$(python3 -c "print(f'{$seconds / $per_step:.4g}')")
+    result=$(awk '/max displacement/ {print $3}' "$log")
+  else
+    shells=$(grep -o 'bonds, [0-9]* shell elements' "$log" | grep -o '[0-9]*')
+    bonds=$(grep -o 'PD nodes, [0-9]* bonds' "$log" | grep -o '[0-9]*' | tail -1)
+    per_step=$(grep -o '[0-9.e+-]* s per step' "$log" | head -1 | awk '{print $1}')
+    result=$(awk '/broken bonds/ {print $3}' "$log")
+  fi
+  echo "$case,$ratio,$percent,$shells,$bonds,$seconds,$per_step,$result" >> "$csv.tmp"
+  echo "ratio $ratio: $seconds s, result $result" >&2
+done
+mv "$csv.tmp" "$csv"
+cat "$csv"
