@@ -52,13 +52,13 @@ for ratio in $ratios; do
   log=$csv.ratio-$ratio.log
   start=$(date +%s.%N)
   "$app" run "$deck" --output "$work/out-$ratio" > "$log" 2>&1 || { echo "pd_ratio_sweep: ratio $ratio failed, see $log" >&2; exit 1; }
-  seconds=$(python3 -c "import sys; print(f'{float(sys.argv[2]) - float(sys.argv[1]):.3f}')" "$start" "$(date +%s.%N)")
+  seconds=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN {printf "%.3f", b - a}')
   percent=$(grep -o 'PD ratio [0-9.]* %' "$log" | head -1 | grep -o '[0-9.]*')
   if [[ $case == pressed ]]; then
     shells=$(grep -o 'implicit: [0-9]* shell elements' "$log" | grep -o '[0-9]*')
     bonds=$(grep -o 'shell elements, [0-9]* bonds' "$log" | grep -o '[0-9]*')
     per_step=$(awk '/^  increments/ {print $2}' "$log" | head -1)
-    per_step=$(python3 -c "print(f'{$seconds / $per_step:.4g}')")
+    per_step=$(awk -v s="$seconds" -v n="$per_step" 'BEGIN {printf "%.4g", s / n}')
     result=$(awk '/max displacement/ {print $3}' "$log")
   else
     shells=$(grep -o 'bonds, [0-9]* shell elements' "$log" | grep -o '[0-9]*')

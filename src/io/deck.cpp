@@ -520,7 +520,7 @@ deck::Transition readTransition(const Section& section, const deck::Zones& zones
 }
 
 deck::Zones readZones(const Section& section, double horizon) {
-  section.allowOnly({"default", "pd-regions", "pd-ratio", "transition"});
+  section.allowOnly({"default", "pd-regions", "pd-ratio", "transition", "adaptive"});
   deck::Zones zones;
   zones.defaultKind = section.choice<deck::ZoneKind>(
       "default", {{"pd", deck::ZoneKind::Pd}, {"ccm", deck::ZoneKind::Ccm}}, zones.defaultKind);
@@ -545,6 +545,21 @@ deck::Zones readZones(const Section& section, double horizon) {
       pdRatio.around.push_back({name, around.vector3(name)});
     if (pdRatio.around.empty()) ratio.fail("around", "needs at least one named point");
     zones.pdRatio = pdRatio;
+  }
+  if (section.has("adaptive")) {
+    if (zones.defaultKind == deck::ZoneKind::Pd)
+      section.fail("adaptive", "needs default: ccm (with default: pd every element is already PD)");
+    const Section block = section.sublist("adaptive");
+    block.allowOnly({"strain-fraction", "check-every"});
+    deck::AdaptiveZone adaptive;
+    adaptive.strainFraction = block.number("strain-fraction", adaptive.strainFraction);
+    if (!(adaptive.strainFraction > 0.0 && adaptive.strainFraction <= 1.0))
+      block.fail("strain-fraction", "must lie in (0, 1] (the share of the bonds' critical stretch s_c at which a "
+                                    "CCM element turns PD), got " + formatNumber(adaptive.strainFraction));
+    adaptive.checkEvery = block.integer("check-every", adaptive.checkEvery);
+    if (adaptive.checkEvery < 1)
+      block.fail("check-every", "must be >= 1 (steps between checks), got " + std::to_string(adaptive.checkEvery));
+    zones.adaptive = adaptive;
   }
   zones.transition = readTransition(section, zones, horizon);
   return zones;
@@ -764,7 +779,8 @@ void checkCrossReferences(Deck& deck, const Section& root) {
   if (deck.zones.hasPd() && material.poissonRatio > 1.0 / 3.0) {
     const std::string where = deck.zones.defaultKind == deck::ZoneKind::Pd ? "zones.default is pd"
                               : !deck.zones.pdRegions.empty()              ? "zones.pd-regions is set"
-                                                                           : "zones.pd-ratio is set";
+                              : deck.zones.pdRatio                         ? "zones.pd-ratio is set"
+                                                                           : "zones.adaptive is set";
     root.fail("material.poisson-ratio",
               "microbeam PD needs nu <= 1/3 (model.md §2): c_bz and c_tor turn negative; got " +
                   formatNumber(material.poissonRatio) + " and " + where);
@@ -790,6 +806,13 @@ void checkCrossReferences(Deck& deck, const Section& root) {
   if (deck.solver.type == deck::SolverType::Implicit &&
       std::find(fields.begin(), fields.end(), deck::OutputField::Velocity) != fields.end())
     root.fail("output.fields", "velocity exists only for the explicit solver");
+  if (deck.zones.adaptive) {
+    if (deck.solver.type != deck::SolverType::Explicit)
+      root.fail("zones.adaptive", "the PD zone grows only in explicit runs (solver.type: explicit)");
+    if (!material.fractureEnergy)
+      root.fail("zones.adaptive", "needs material.fracture-energy: elements turn PD at a share of the bonds' "
+                                  "critical stretch, which G_c sets (model.md §3)");
+  }
   if (material.fractureEnergy && !deck.zones.hasPd())
     deck.warnings.push_back(
         "material.fracture-energy: the model has no PD zone, and only PD bonds fracture (model.md §3)");

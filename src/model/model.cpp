@@ -123,6 +123,21 @@ void checkSetReferences(const Deck& deck, const mesh::MeshSets& sets, long long&
   }
 }
 
+// Closest distance from p to the segment a-b.
+double distanceToSegment(const Vector3& p, const double a[3], const double b[3]) {
+  double ab[3], ap[3], lengthSquared = 0.0, projection = 0.0;
+  for (int d = 0; d < 3; ++d) {
+    ab[d] = b[d] - a[d];
+    ap[d] = p[d] - a[d];
+    lengthSquared += ab[d] * ab[d];
+    projection += ab[d] * ap[d];
+  }
+  const double s = std::clamp(projection / lengthSquared, 0.0, 1.0);
+  double sum = 0.0;
+  for (int d = 0; d < 3; ++d) sum += (ap[d] - s * ab[d]) * (ap[d] - s * ab[d]);
+  return std::sqrt(sum);
+}
+
 // PD flags per element from zones (docs/deck.md "zones").
 LocalIndex flagPdElements(const Deck& deck, const mesh::ShellMesh& shell,
                           Kokkos::View<std::uint8_t*, Kokkos::HostSpace>& isPd) {
@@ -171,24 +186,19 @@ LocalIndex flagPdElements(const Deck& deck, const mesh::ShellMesh& shell,
     for (LocalIndex k = 0; k < count; ++k) isPd(byDistance[k].second) = 1;
   }
 
+  if (zones.adaptive) {
+    // A pre-crack exists only in bonds (model.md §3): the elements within a horizon of it
+    // start PD, and the adaptive zone grows from them.
+    const double horizon = deck.peridynamics.horizonFactor * deck.mesh.spacing;
+    for (const auto& crack : deck.mesh.preCracks)
+      for (LocalIndex element = 0; element < numElements; ++element)
+        if (distanceToSegment(elementCentroid(mesh, element), crack.segment.start, crack.segment.end) <= horizon)
+          isPd(element) = 1;
+  }
+
   LocalIndex numPd = 0;
   for (LocalIndex element = 0; element < numElements; ++element) numPd += isPd(element);
   return numPd;
-}
-
-// Closest distance from p to the segment a-b.
-double distanceToSegment(const Vector3& p, const double a[3], const double b[3]) {
-  double ab[3], ap[3], lengthSquared = 0.0, projection = 0.0;
-  for (int d = 0; d < 3; ++d) {
-    ab[d] = b[d] - a[d];
-    ap[d] = p[d] - a[d];
-    lengthSquared += ab[d] * ab[d];
-    projection += ab[d] * ap[d];
-  }
-  const double s = std::clamp(projection / lengthSquared, 0.0, 1.0);
-  double sum = 0.0;
-  for (int d = 0; d < 3; ++d) sum += (ap[d] - s * ab[d]) * (ap[d] - s * ab[d]);
-  return std::sqrt(sum);
 }
 
 // A crack lives only where bonds do (model.md §3): some PD node must lie within δ of it.

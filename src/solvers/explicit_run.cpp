@@ -2,7 +2,7 @@
 #include <perishell/io/progress.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/nodal_loads.hpp>
-#include <perishell/coupling/make_coupled_model.hpp>
+#include <perishell/coupling/adaptive_zone.hpp>
 #include <perishell/solvers/explicit/central_difference.hpp>
 #include <perishell/solvers/explicit/explicit_run.hpp>
 #include <perishell/solvers/model_actions.hpp>
@@ -53,7 +53,8 @@ class RunOutput {
       : model_(model),
         solver_(solver),
         writer_(createdDirectory(directory), "results", model.shell.mesh),
-        damage_("pd damage", model.shell.mesh.numNodes()) {
+        damage_("pd damage", model.shell.mesh.numNodes()),
+        zoneNodes_(model.pdNodes) {
     const auto& deck = model.deck;
     std::vector<std::string> columns = {"step", "time"};
     for (const auto& load : deck.loads)
@@ -91,6 +92,8 @@ class RunOutput {
   }
 
   std::string xdmfPath() const { return writer_.xdmfPath(); }
+  // The nodes of PD elements, for the zone field (the adaptive zone grows them).
+  void setZoneNodes(const Kokkos::View<LocalIndex*, Kokkos::HostSpace>& nodes) { zoneNodes_ = nodes; }
   std::string historyPath() const { return history_->path(); }
 
   void writeFields() {
@@ -119,7 +122,7 @@ class RunOutput {
           break;
         case deck::OutputField::Zone: {
           Kokkos::View<int*, Kokkos::HostSpace> zone("zone", numNodes);
-          for (std::size_t k = 0; k < model_.pdNodes.extent(0); ++k) zone(model_.pdNodes(k)) = 1;
+          for (std::size_t k = 0; k < zoneNodes_.extent(0); ++k) zone(zoneNodes_(k)) = 1;
           fields.push_back(io::makeScalarField("zone", zone));
           break;
         }
@@ -210,6 +213,7 @@ class RunOutput {
   io::XdmfTimeSeriesWriter writer_;
   std::optional<io::CsvHistory> history_;
   VectorView<Memory> damage_;
+  Kokkos::View<LocalIndex*, Kokkos::HostSpace> zoneNodes_;
   std::vector<std::string> curves_;
   std::array<double, 3> crackOrigin_{0.0, 0.0, 0.0};
   double lastTipTime_ = -1.0, lastTipDistance_ = 0.0;
@@ -223,8 +227,13 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
   const auto& settings = deck.solver.explicitSettings;
   const ExecutionSpace space;
   const auto setupStart = std::chrono::steady_clock::now();
-  // Bonds where alpha > 0, shell elements where the model is CCM or in the transition (model.md §4).
-  auto bodies = coupling::makeCoupledBodies(space, model);
+  // Bonds where alpha > 0, shell elements where the model is CCM or in the transition (model.md §4);
+  // with zones.adaptive the zone object owns them and grows the PD zone during the run.
+  std::optional<coupling::AdaptivePdZone<ExecutionSpace>> adaptive;
+  if (deck.zones.adaptive)
+    adaptive.emplace(space, model.shell.mesh, model.elementIsPd, coupling::couplingInputs(model),
+                     deck.zones.adaptive->strainFraction);
+  const auto bodies = adaptive ? adaptive->bodies() : coupling::makeCoupledBodies(space, model);
   const auto& body = bodies.pdBody;
   std::optional<shell::ShellBody<Memory>> shellBody;
   if (bodies.shellBody.numElements() > 0) shellBody = bodies.shellBody;
@@ -246,6 +255,10 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
       << ExecutionSpace::name() << "; dt = " << solver.timeStep() << " s (critical estimate "
       << solver.criticalTimeStep() << " s), " << totalSteps << " steps to t = " << totalSteps * solver.timeStep()
       << " s; setup " << formatSeconds(setupSeconds) << "\n";
+  if (adaptive)
+    log << "adaptive PD zone: a CCM element turns PD when its surface strain reaches "
+        << deck.zones.adaptive->strainFraction << " x s_c = " << adaptive->threshold() << " (checked every "
+        << deck.zones.adaptive->checkEvery << " steps); " << model.numPdElements << " PD elements at the start\n";
   if (solver.timeStep() > solver.criticalTimeStep())
     log << "warning: solver.dt is " << solver.timeStep() / solver.criticalTimeStep()
         << " x the estimated critical step; the run is expected to go unstable\n";
@@ -257,9 +270,24 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
   io::ProgressReporter progress(totalSteps, log);
   const auto runStart = std::chrono::steady_clock::now();
   const long long fieldEvery = deck.output.every, historyEvery = deck.output.historyEvery;
+  long long switches = 0;
   while (solver.stepIndex() < totalSteps) {
     solver.step();
     const long long step = solver.stepIndex();
+    if (adaptive && step % deck.zones.adaptive->checkEvery == 0) {
+      const LocalIndex switched = adaptive->update(solver.kinematics());
+      if (switched > 0) {
+        const auto& grown = adaptive->bodies();
+        std::optional<shell::ShellBody<Memory>> grownShell;
+        if (grown.shellBody.numElements() > 0) grownShell = grown.shellBody;
+        solver.replaceBodies(grown.pdBody, grownShell);
+        output.setZoneNodes(adaptive->pdElementNodes());
+        ++switches;
+        log << "adaptive PD zone: step " << step << " (t = " << solver.time() << " s): " << switched
+            << " elements turned PD, now " << adaptive->numPdElements() << " PD elements, "
+            << grown.pdBody.bonds.numBonds() << " bonds, " << solver.numElements() << " shell elements\n";
+      }
+    }
     const bool last = step == totalSteps;
     if (last || step % historyEvery == 0) output.appendHistory(solver);
     if (last || (fieldEvery > 0 && step % fieldEvery == 0)) output.writeFields();
@@ -279,18 +307,22 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
   std::ostringstream balance;
   balance.precision(3);
   balance << energy.balanceError();
-  io::SummaryTable("explicit run summary")
-      .add("steps", std::to_string(totalSteps))
+  io::SummaryTable table("explicit run summary");
+  table.add("steps", std::to_string(totalSteps))
       .add("time step", formatSeconds(summary.timeStep) + " (critical " + formatSeconds(summary.criticalTimeStep) + ")")
       .add("simulated time", formatSeconds(summary.endTime))
       .add("wall time", io::formatDuration(summary.wallSeconds) + " (" +
                             formatSeconds(summary.wallSeconds / double(totalSteps)) + " per step)")
       .add("setup", formatSeconds(setupSeconds))
-      .add("broken bonds", std::to_string(summary.brokenBonds) + " of " + std::to_string(body.bonds.numBonds()))
+      .add("broken bonds", std::to_string(summary.brokenBonds) + " of " + std::to_string(solver.body().bonds.numBonds()))
       .add("energy balance error", balance.str())
       .add("fields", summary.xdmfPath)
-      .add("history", summary.historyPath)
-      .print(log);
+      .add("history", summary.historyPath);
+  if (adaptive)
+    table.add("adaptive PD zone", std::to_string(model.numPdElements) + " -> " +
+                                      std::to_string(adaptive->numPdElements()) + " PD elements in " +
+                                      std::to_string(switches) + " switches");
+  table.print(log);
   return summary;
 }
 

@@ -485,6 +485,19 @@ struct BadDeck {
   std::vector<std::string> reasonParts;
 };
 
+// Each edited base deck is refused, naming its key path, with every part in the reason, in
+// the message "bad.yaml: <key path>: <reason>".
+void expectDeckErrors(const std::vector<BadDeck>& cases) {
+  for (const auto& bad : cases) {
+    SCOPED_TRACE(bad.name);
+    const DeckError error = deckErrorOf(edited(baseDeck, bad.edits));
+    EXPECT_EQ(error.keyPath(), bad.keyPath) << error.what();
+    for (const auto& part : bad.reasonParts)
+      EXPECT_NE(error.reason().find(part), std::string::npos) << "reason: " << error.reason();
+    EXPECT_EQ(std::string(error.what()), "bad.yaml: " + bad.keyPath + ": " + error.reason());
+  }
+}
+
 TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
   const std::string pdRegion =
       "    default: ccm\n    pd-regions:\n      zone:\n        box: {min: [0, 0, -1], max: [1, 1, 1]}\n";
@@ -606,14 +619,7 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
       {"history every zero", {{"    every: 1\n", "    every: 1\n    history-every: 0\n"}}, "output.history-every",
        {"must be >= 1, got 0"}},
   };
-  for (const auto& bad : cases) {
-    SCOPED_TRACE(bad.name);
-    const DeckError error = deckErrorOf(edited(baseDeck, bad.edits));
-    EXPECT_EQ(error.keyPath(), bad.keyPath) << error.what();
-    for (const auto& part : bad.reasonParts)
-      EXPECT_NE(error.reason().find(part), std::string::npos) << "reason: " << error.reason();
-    EXPECT_EQ(std::string(error.what()), "bad.yaml: " + bad.keyPath + ": " + error.reason());
-  }
+  expectDeckErrors(cases);
 }
 
 TEST(TEST_CATEGORY, deck_yaml_errors_name_the_line) {
@@ -705,11 +711,40 @@ TEST(TEST_CATEGORY, deck_zones_transition_defaults_values_and_rules) {
       {"in a pure CCM model", {{"    default: pd\n", "    default: ccm\n    transition: {width: 8.0e-3}\n"}},
        "zones.transition", {"needs a PD zone"}},
   };
-  for (const auto& bad : cases) {
-    SCOPED_TRACE(bad.name);
-    const DeckError error = deckErrorOf(edited(baseDeck, bad.edits));
-    EXPECT_EQ(error.keyPath(), bad.keyPath) << error.what();
-    for (const auto& part : bad.reasonParts)
-      EXPECT_NE(error.reason().find(part), std::string::npos) << "reason: " << error.reason();
-  }
+  expectDeckErrors(cases);
+}
+
+TEST(TEST_CATEGORY, deck_zones_adaptive_values_and_rules) {
+  const Edit explicitSolver{"    type: implicit\n    increments: 10\n", "    type: explicit\n    steps: 10\n"};
+  const Edit adaptiveZone{"    default: pd\n", "    default: ccm\n    adaptive: {strain-fraction: 0.3, check-every: 5}\n"};
+  const Deck given = parseDeck(edited(baseDeck, {explicitSolver, adaptiveZone}), "adaptive.yaml");
+  ASSERT_TRUE(given.zones.adaptive.has_value());
+  EXPECT_DOUBLE_EQ(given.zones.adaptive->strainFraction, 0.3);
+  EXPECT_EQ(given.zones.adaptive->checkEvery, 5);
+  EXPECT_TRUE(given.zones.hasPd());  // the nu <= 1/3 rule applies
+  const Deck defaults = parseDeck(
+      edited(baseDeck, {explicitSolver, {"    default: pd\n", "    default: ccm\n    adaptive: {check-every: 10}\n"}}),
+      "defaults.yaml");
+  ASSERT_TRUE(defaults.zones.adaptive.has_value());
+  EXPECT_DOUBLE_EQ(defaults.zones.adaptive->strainFraction, 0.5);
+  EXPECT_EQ(defaults.zones.adaptive->checkEvery, 10);
+  EXPECT_FALSE(parseDeck(baseDeck, "plain.yaml").zones.adaptive.has_value());
+  const std::vector<BadDeck> cases{
+      {"fraction above 1", {explicitSolver, {"    default: pd\n", "    default: ccm\n    adaptive: {strain-fraction: 1.5}\n"}},
+       "zones.adaptive.strain-fraction", {"must lie in (0, 1]", "got 1.5"}},
+      {"fraction 0", {explicitSolver, {"    default: pd\n", "    default: ccm\n    adaptive: {strain-fraction: 0.0}\n"}},
+       "zones.adaptive.strain-fraction", {"must lie in (0, 1]"}},
+      {"check every 0", {explicitSolver, {"    default: pd\n", "    default: ccm\n    adaptive: {check-every: 0}\n"}},
+       "zones.adaptive.check-every", {"must be >= 1"}},
+      {"unknown key", {explicitSolver, {"    default: pd\n", "    default: ccm\n    adaptive: {threshold: 0.5}\n"}},
+       "zones.adaptive.threshold", {"unknown key"}},
+      {"with default pd", {explicitSolver, {"    default: pd\n", "    default: pd\n    adaptive: {check-every: 5}\n"}},
+       "zones.adaptive", {"needs default: ccm"}},
+      {"implicit", {adaptiveZone}, "zones.adaptive", {"only in explicit runs"}},
+      {"no fracture energy", {explicitSolver, adaptiveZone, {"    fracture-energy: 255.0e3\n", ""}}, "zones.adaptive",
+       {"needs material.fracture-energy"}},
+      {"nu above 1/3", {explicitSolver, adaptiveZone, {"poisson-ratio: 0.3", "poisson-ratio: 0.4"}},
+       "material.poisson-ratio", {"zones.adaptive is set"}},
+  };
+  expectDeckErrors(cases);
 }

@@ -130,10 +130,8 @@ CoupledBodies<typename ExecutionSpaceT::memory_space> makeCoupledBodies(
   return bodies;
 }
 
-// The same from a model (its deck's material, horizon, pre-cracks and zones.transition).
-template <class ExecutionSpaceT>
-CoupledBodies<typename ExecutionSpaceT::memory_space> makeCoupledBodies(const ExecutionSpaceT& space,
-                                                                        const model::Model& model) {
+// A model's coupling inputs: its deck's material, horizon, pre-cracks and zones.transition.
+inline CouplingInputs couplingInputs(const model::Model& model) {
   const auto& material = model.deck.material;
   CouplingInputs inputs;
   inputs.material = {material.youngModulus, material.poissonRatio, material.thickness, material.fractureEnergy};
@@ -144,7 +142,13 @@ CoupledBodies<typename ExecutionSpaceT::memory_space> makeCoupledBodies(const Ex
   inputs.gridSpacing = model.gridSpacing();
   inputs.preCracks = model.preCrackSegments();
   inputs.transition = model.deck.zones.transition;
-  return makeCoupledBodies(space, model.shell.mesh, model.elementIsPd, inputs);
+  return inputs;
+}
+
+template <class ExecutionSpaceT>
+CoupledBodies<typename ExecutionSpaceT::memory_space> makeCoupledBodies(const ExecutionSpaceT& space,
+                                                                        const model::Model& model) {
+  return makeCoupledBodies(space, model.shell.mesh, model.elementIsPd, couplingInputs(model));
 }
 
 }  // namespace perishell::coupling

@@ -109,14 +109,22 @@ struct Transition {
   TransitionProfile profile = TransitionProfile::Cubic;
 };
 
+// zones.adaptive (explicit runs): a CCM element turns PD when its largest surface strain
+// reaches strainFraction x the bonds' critical stretch s_c (coupling/adaptive_zone.hpp).
+struct AdaptiveZone {
+  double strainFraction = 0.5;
+  long long checkEvery = 10;  // steps between checks
+};
+
 struct Zones {
   ZoneKind defaultKind = ZoneKind::Pd;
   std::vector<PdRegion> pdRegions;
   std::optional<PdRatio> pdRatio;
   Transition transition;
+  std::optional<AdaptiveZone> adaptive;
   // Whether any element can be PD (the ν <= 1/3 rule and fracture depend on it).
   bool hasPd() const {
-    return defaultKind == ZoneKind::Pd || !pdRegions.empty() || (pdRatio && pdRatio->target > 0.0);
+    return defaultKind == ZoneKind::Pd || !pdRegions.empty() || (pdRatio && pdRatio->target > 0.0) || adaptive;
   }
 };
 

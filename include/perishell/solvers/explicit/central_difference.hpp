@@ -12,12 +12,14 @@
 // must hold (to the scheme's O(dt^2)). A time step above the stability limit makes the
 // highest mode grow by a factor of several per step; its energy then far exceeds the work
 // done on the body, and the run stops with ExplicitInstability instead of producing garbage.
+#include <perishell/fracture/carry_broken_bonds.hpp>
 #include <perishell/fracture/damage.hpp>
 #include <perishell/pd/bond_forces.hpp>
 #include <perishell/solvers/explicit/external_actions.hpp>
 #include <perishell/solvers/explicit/nodal_inertia.hpp>
 #include <perishell/shell/shell_body.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <sstream>
@@ -129,6 +131,38 @@ class CentralDifferenceSolver {
                             pd::BondForceOutputs<MemorySpace>{forces_, strainEnergy_, discardedFracture_, discardedFlags_});
     if (shell_) shell::subtractShellForces(space_, *shell_, state_, forces_, strainEnergy_);
     return reduceEnergies(kineticAtHalfSteps());
+  }
+
+  // Switches to new bodies over the same mesh nodes (the adaptive PD zone,
+  // coupling/adaptive_zone.hpp). Displacements, rotations, velocities and the energy
+  // accumulators carry over; a bond of the new list between two nodes whose old bond was
+  // broken stays broken (fracture/carry_broken_bonds.hpp). The stiffness and the rotary
+  // inertia change under the current state, and with them the strain and kinetic energy:
+  // that jump is booked as input, so the energy balance stays closed. A time step taken
+  // from the estimate is lowered to safetyFactor x the new estimate when needed; a fixed one
+  // above the new critical step throws ExplicitInstability.
+  void replaceBodies(pd::PdBody<MemorySpace> body, std::optional<shell::ShellBody<MemorySpace>> shellBody) {
+    const double before = energies().stored();
+    intact_ = fracture::carryBrokenBonds(space_, body_.bonds, intact_, body.bonds);
+    intactNext_ = pd::makeIntactFlags(body.bonds, "intact bonds next");
+    Kokkos::deep_copy(space_, intactNext_, intact_);
+    body_ = std::move(body);
+    shell_ = std::move(shellBody);
+    discardedFracture_ = VectorView<MemorySpace>();
+    discardedFlags_ = pd::BondFlagView<MemorySpace>();
+    validate();
+    inertia_ = computeNodalInertia(space_, body_, shell_, options_.density, options_.thickness);
+    criticalTimeStep_ = estimateCriticalTimeStep();
+    initialEnergy_ += energies().stored() - before;
+    // A step chosen from the estimate follows it down; one the deck fixed must stay below it.
+    if (options_.timeStep <= 0.0) timeStep_ = std::min(timeStep_, options_.safetyFactor * criticalTimeStep_);
+    if (timeStep_ > criticalTimeStep_) {
+      std::ostringstream message;
+      message.precision(4);
+      message << "explicit solver: after the PD zone grew at step " << step_ << " the critical step is "
+              << criticalTimeStep_ << " s, below dt = " << timeStep_ << " s; lower solver.dt or leave it out";
+      throw ExplicitInstability(message.str());
+    }
   }
 
   long long stepIndex() const { return step_; }
