@@ -4,22 +4,23 @@
 # and output included), time per increment or step, and the result (pressed: largest
 # displacement [m]; steel: broken bonds) to a CSV.
 #
-#   perf/pd_ratio_sweep.sh APP CASE OUT.csv [STEPS]
+#   perf/pd_ratio_sweep.sh APP CASE OUT.csv [LIMIT]
 #
 # APP   the perishell executable of the build to measure (OpenMP or CUDA preset)
 # CASE  pressed  - 4.2.1 pressed plate (implicit), ratios 0, 0.25, 0.5, 0.75, 1; the zone
 #                  grows from the middle of the clamped edge (apps/cases/pressed_plate_4_2_1.yaml)
 #       steel    - 4.2.2 steel plate (explicit), ratios 0.25, 0.5, 0.75, 1 (its pre-crack must
 #                  lie in PD); the zone grows from the crack centre
-# STEPS explicit only: stop after this many steps (the load ramp is unchanged), to time
-#       the per-step cost on a slow backend; default the deck's 50,000.
+# LIMIT to time a slow backend in less time: steel - stop after this many steps (the load
+#       ramp is unchanged; default the deck's 50,000); pressed - the grid spacing [m]
+#       (default the deck's 0.5e-3).
 # Each run's full log is kept next to the CSV (OUT.csv.ratio-R.log).
 set -euo pipefail
 if [[ $# -lt 3 ]]; then
   sed -n '2,17p' "$0" >&2
   exit 2
 fi
-app=$1 case=$2 csv=$3 steps=${4:-}
+app=$1 case=$2 csv=$3 limit=${4:-}
 cases="$(cd "$(dirname "${BASH_SOURCE[0]}")/../apps/cases" && pwd)"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -36,12 +37,13 @@ deck_for() {
   case $case in
     pressed)
       sed -e "s/^      target: 0.5$/      target: $ratio/" "$base" > "$deck"
-      grep -q "target: $ratio\$" "$deck" || { echo "pd_ratio_sweep: $base has no 'target: 0.5' line" >&2; exit 1; } ;;
+      grep -q "target: $ratio\$" "$deck" || { echo "pd_ratio_sweep: $base has no 'target: 0.5' line" >&2; exit 1; }
+      if [[ -n $limit ]]; then sed -i -e "s/^    spacing: 0.5e-3$/    spacing: $limit/" "$deck"; fi ;;
     steel)
       sed -e "s/^    default: pd$/    default: ccm\n    pd-ratio: {target: $ratio, around: {crack-centre: [0.1015, 0.1015, 0.0]}}/" \
         "$base" > "$deck"
       grep -q "pd-ratio: {target: $ratio" "$deck" || { echo "pd_ratio_sweep: $base has no 'default: pd' line" >&2; exit 1; }
-      if [[ -n $steps ]]; then sed -i -e "s/^    steps: 50000$/    steps: $steps/" "$deck"; fi ;;
+      if [[ -n $limit ]]; then sed -i -e "s/^    steps: 50000$/    steps: $limit/" "$deck"; fi ;;
   esac
   echo "$deck"
 }

@@ -187,12 +187,14 @@ LocalIndex flagPdElements(const Deck& deck, const mesh::ShellMesh& shell,
   }
 
   if (zones.adaptive) {
-    // A pre-crack exists only in bonds (model.md §3): the elements within a horizon of it
-    // start PD, and the adaptive zone grows from them.
-    const double horizon = deck.peridynamics.horizonFactor * deck.mesh.spacing;
+    // A pre-crack exists only in bonds (model.md §3): the elements within two horizons of it
+    // start PD, and the adaptive zone grows from them. Two, because a PD node within one
+    // horizon of the zone's edge still bonds to transition nodes and keeps a CCM share that
+    // bridges a crack (docs/coupling.md): the crack line and its tips need pure PD around them.
+    const double seedRadius = 2.0 * deck.peridynamics.horizonFactor * deck.mesh.spacing;
     for (const auto& crack : deck.mesh.preCracks)
       for (LocalIndex element = 0; element < numElements; ++element)
-        if (distanceToSegment(elementCentroid(mesh, element), crack.segment.start, crack.segment.end) <= horizon)
+        if (distanceToSegment(elementCentroid(mesh, element), crack.segment.start, crack.segment.end) <= seedRadius)
           isPd(element) = 1;
   }
 
