@@ -235,8 +235,6 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
                      deck.zones.adaptive->strainFraction);
   const auto bodies = adaptive ? adaptive->bodies() : coupling::makeCoupledBodies(space, model);
   const auto& body = bodies.pdBody;
-  std::optional<shell::ShellBody<Memory>> shellBody;
-  if (bodies.shellBody.numElements() > 0) shellBody = bodies.shellBody;
   ExplicitOptions options;
   options.density = deck.material.density;
   options.thickness = deck.material.thickness;
@@ -245,7 +243,8 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
   options.damping = settings.damping;
   options.forceKernel = deck.peridynamics.forceKernel;
   options.monitorEvery = std::min<long long>(100, deck.output.historyEvery);
-  CentralDifferenceSolver<ExecutionSpace> solver(space, body, shellBody, makeExternalActions<Memory>(model), options);
+  CentralDifferenceSolver<ExecutionSpace> solver(space, body, bodies.shellElements(), makeExternalActions<Memory>(model),
+                                                 options);
   const long long totalSteps =
       settings.steps ? *settings.steps
                      : std::max(1LL, static_cast<long long>(std::ceil(*settings.endTime / solver.timeStep() - 1e-9)));
@@ -275,17 +274,13 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
     solver.step();
     const long long step = solver.stepIndex();
     if (adaptive && step % deck.zones.adaptive->checkEvery == 0) {
-      const LocalIndex switched = adaptive->update(solver.kinematics());
+      const LocalIndex switched = coupling::growPdZone(*adaptive, solver);
       if (switched > 0) {
-        const auto& grown = adaptive->bodies();
-        std::optional<shell::ShellBody<Memory>> grownShell;
-        if (grown.shellBody.numElements() > 0) grownShell = grown.shellBody;
-        solver.replaceBodies(grown.pdBody, grownShell);
         output.setZoneNodes(adaptive->pdElementNodes());
         ++switches;
         log << "adaptive PD zone: step " << step << " (t = " << solver.time() << " s): " << switched
             << " elements turned PD, now " << adaptive->numPdElements() << " PD elements, "
-            << grown.pdBody.bonds.numBonds() << " bonds, " << solver.numElements() << " shell elements\n";
+            << solver.body().bonds.numBonds() << " bonds, " << solver.numElements() << " shell elements\n";
       }
     }
     const bool last = step == totalSteps;

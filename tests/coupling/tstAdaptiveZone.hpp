@@ -64,26 +64,20 @@ CrackRun runToTheEnd(const perishell::model::Model& model, double timeStep, int 
     adaptive.emplace(space, model.shell.mesh, model.elementIsPd, perishell::coupling::couplingInputs(model),
                      model.deck.zones.adaptive->strainFraction);
   const auto bodies = adaptive ? adaptive->bodies() : perishell::coupling::makeCoupledBodies(space, model);
-  std::optional<perishell::shell::ShellBody<Memory>> shellBody;
-  if (bodies.shellBody.numElements() > 0) shellBody = bodies.shellBody;
   perishell::solvers::ExplicitOptions options;
   options.density = model.deck.material.density;
   options.thickness = model.deck.material.thickness;
   options.timeStep = timeStep;
-  perishell::solvers::CentralDifferenceSolver<Space> solver(space, bodies.pdBody, shellBody,
+  perishell::solvers::CentralDifferenceSolver<Space> solver(space, bodies.pdBody, bodies.shellElements(),
                                                             perishell::solvers::makeExternalActions<Memory>(model),
                                                             options);
   CrackRun run;
   run.startPdElements = model.numPdElements;
   for (int step = 1; step <= steps; ++step) {
     solver.step();
-    if (adaptive && step % model.deck.zones.adaptive->checkEvery == 0 && adaptive->update(solver.kinematics()) > 0) {
-      const auto& grown = adaptive->bodies();
-      std::optional<perishell::shell::ShellBody<Memory>> grownShell;
-      if (grown.shellBody.numElements() > 0) grownShell = grown.shellBody;
-      solver.replaceBodies(grown.pdBody, grownShell);
+    if (adaptive && step % model.deck.zones.adaptive->checkEvery == 0 &&
+        perishell::coupling::growPdZone(*adaptive, solver) > 0)
       ++run.switches;
-    }
   }
   run.endPdElements = adaptive ? adaptive->numPdElements() : model.numPdElements;
   run.brokenBonds = solver.brokenBonds();

@@ -63,13 +63,11 @@ Solver<ExecutionSpaceT> makeSolver(const MixedPlate& plate,
                                    double timeStep = 0.0) {
   auto bodies = perishell::coupling::makeCoupledBodies(ExecutionSpaceT{}, plate.shell.mesh, plate.elementIsPd,
                                                        plate.inputs);
-  std::optional<perishell::shell::ShellBody<typename ExecutionSpaceT::memory_space>> shellBody;
-  if (bodies.shellBody.numElements() > 0) shellBody = bodies.shellBody;
   perishell::solvers::ExplicitOptions options;
   options.density = density;
   options.thickness = thickness;
   options.timeStep = timeStep;
-  return Solver<ExecutionSpaceT>(ExecutionSpaceT{}, bodies.pdBody, shellBody, std::move(actions), options);
+  return Solver<ExecutionSpaceT>(ExecutionSpaceT{}, bodies.pdBody, bodies.shellElements(), std::move(actions), options);
 }
 
 // A smooth mix of membrane and bending motion over a 24 mm plate.

@@ -4,7 +4,8 @@
 // §3: 1/2 c_ax s_c^2 xi = w_c, so s_c = sqrt(2 w_c / (c_ax xi))) turns PD; the coupled
 // bodies are rebuilt around the grown zone (alpha, bonds, hybrid sections;
 // coupling/make_coupled_model.hpp) and the solver carries its state over
-// (CentralDifferenceSolver::replaceBodies). Elements only ever turn PD, never back.
+// (growPdZone below, CentralDifferenceSolver::replaceBodies). Elements only ever turn PD,
+// never back.
 // The check is one kernel per element and a reduction; the host sees the strains only when
 // some element switches, and then rebuilds the bodies (rare, at setup cost).
 #include <perishell/coupling/make_coupled_model.hpp>
@@ -118,5 +119,14 @@ class AdaptivePdZone {
   VectorView<Memory> strain_;
   double criticalStretch_ = 0.0, threshold_ = 0.0;
 };
+
+// One check of the zone against the solver's current state; when elements switched, the
+// solver continues on the grown bodies. Returns how many elements switched.
+template <class ExecutionSpaceT, class SolverT>
+LocalIndex growPdZone(AdaptivePdZone<ExecutionSpaceT>& zone, SolverT& solver) {
+  const LocalIndex switched = zone.update(solver.kinematics());
+  if (switched > 0) solver.replaceBodies(zone.bodies().pdBody, zone.bodies().shellElements());
+  return switched;
+}
 
 }  // namespace perishell::coupling

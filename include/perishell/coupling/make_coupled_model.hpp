@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,16 @@ struct CoupledBodies {
   // Shell body element k is mesh element ccmElements[k]: the elements with alphaBar < 1 at some node.
   std::vector<LocalIndex> ccmElements;
   shell::ShellBody<MemorySpaceT> shellBody;
+
+  // The bodies as the solvers take them: none where the model has no element or no bond carrier.
+  std::optional<shell::ShellBody<MemorySpaceT>> shellElements() const {
+    if (shellBody.numElements() == 0) return std::nullopt;
+    return shellBody;
+  }
+  std::optional<pd::PdBody<MemorySpaceT>> bondCarriers() const {
+    if (pdNodes.extent(0) == 0) return std::nullopt;
+    return pdBody;
+  }
 };
 
 struct CouplingInputs {

@@ -126,10 +126,7 @@ class CentralDifferenceSolver {
       discardedFracture_ = VectorView<MemorySpace>("pd fracture energy scratch", body_.numNodes());
       discardedFlags_ = pd::BondFlagView<MemorySpace>("intact bonds scratch", body_.bonds.numBonds());
     }
-    if (body_.bonds.numBonds() > 0)
-      pd::computeBondForces(space_, options_.forceKernel, body_, state_, intact_,
-                            pd::BondForceOutputs<MemorySpace>{forces_, strainEnergy_, discardedFracture_, discardedFlags_});
-    if (shell_) shell::subtractShellForces(space_, *shell_, state_, forces_, strainEnergy_);
+    addInternalForces(state_, {forces_, strainEnergy_, discardedFracture_, discardedFlags_});
     return reduceEnergies(kineticAtHalfSteps());
   }
 
@@ -236,10 +233,14 @@ class CentralDifferenceSolver {
     if (withStrainEnergy) Kokkos::deep_copy(space_, strainEnergy_, 0.0);
     const pd::BondForceOutputs<MemorySpace> outputs{
         forces_, withStrainEnergy ? strainEnergy_ : VectorView<MemorySpace>(), fractureEnergy_, intactNext_};
-    if (body_.bonds.numBonds() > 0) pd::computeBondForces(space_, options_.forceKernel, body_, state_, intact_, outputs);
-    if (shell_)
-      shell::subtractShellForces(space_, *shell_, state_, forces_,
-                                 withStrainEnergy ? strainEnergy_ : VectorView<MemorySpace>());
+    addInternalForces(state_, outputs);
+  }
+
+  // The forces bonds and elements exert on the nodes in `state`, added into outputs.forces;
+  // their strain energy into outputs.strainEnergy unless it is empty.
+  void addInternalForces(const pd::PdKinematics<MemorySpace>& state, const pd::BondForceOutputs<MemorySpace>& outputs) {
+    if (body_.bonds.numBonds() > 0) pd::computeBondForces(space_, options_.forceKernel, body_, state, intact_, outputs);
+    if (shell_) shell::subtractShellForces(space_, *shell_, state, outputs.forces, outputs.strainEnergy);
   }
 
   // The leapfrog update of one node's six DOFs; work and dissipation accumulate per node
@@ -426,8 +427,7 @@ class CentralDifferenceSolver {
           });
       Kokkos::deep_copy(space_, trialForces, 0.0);
       const pd::BondForceOutputs<MemorySpace> outputs{trialForces, VectorView<MemorySpace>(), scratchEnergy, scratchIntact};
-      if (body_.bonds.numBonds() > 0) pd::computeBondForces(space_, options_.forceKernel, body_, trial, intact_, outputs);
-      if (shell_) shell::subtractShellForces(space_, *shell_, trial, trialForces);
+      addInternalForces(trial, outputs);
       // product = M^-1/2 K M^-1/2 direction = -M^-1/2 f / epsilon; Rayleigh quotient and next direction.
       Kokkos::parallel_for(
           "perishell::solvers::CentralDifferenceSolver::powerIterationProduct",

@@ -32,11 +32,7 @@ StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& spac
   const auto& deck = model.deck;
   const auto& settings = deck.solver.implicitSettings;
   // Shell elements where the model is CCM or in the transition, bonds where alpha > 0 (model.md §4).
-  auto bodies = coupling::makeCoupledBodies(space, model);
-  std::optional<shell::ShellBody<Memory>> shellBody;
-  std::optional<pd::PdBody<Memory>> pdBody;
-  if (bodies.shellBody.numElements() > 0) shellBody = std::move(bodies.shellBody);
-  if (bodies.pdNodes.extent(0) > 0) pdBody = std::move(bodies.pdBody);
+  const auto bodies = coupling::makeCoupledBodies(space, model);
   NewtonOptions options;
   options.maxIterations = settings.maxIterations;
   options.tolerance = settings.tolerance;
@@ -51,8 +47,8 @@ StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& spac
                             (settings.tangent == deck::Tangent::Auto && appliesMoments(actions))
                         ? TangentForm::Exact
                         : TangentForm::Symmetric;
-  return StaticNewtonSolver<ExecutionSpaceT>(space, model.shell.mesh.numNodes(), std::move(shellBody),
-                                             std::move(pdBody), std::move(actions), options);
+  return StaticNewtonSolver<ExecutionSpaceT>(space, model.shell.mesh.numNodes(), bodies.shellElements(),
+                                             bodies.bondCarriers(), std::move(actions), options);
 }
 
 }  // namespace perishell::solvers
