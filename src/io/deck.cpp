@@ -684,7 +684,7 @@ deck::Solver readSolver(const Section& section) {
   using deck::SolverType;
   const std::vector<std::string> explicitKeys{"type", "end-time", "steps", "dt", "safety-factor", "damping"};
   const std::vector<std::string> implicitKeys{"type", "increments", "max-iterations", "tolerance",
-                                              "preconditioner", "max-cuts", "tangent"};
+                                              "preconditioner", "max-cuts", "tangent", "amg-reuse"};
   std::vector<std::string> allKeys = explicitKeys;
   allKeys.insert(allKeys.end(), implicitKeys.begin() + 1, implicitKeys.end());
   section.allowOnly(allKeys);
@@ -744,6 +744,10 @@ deck::Solver readSolver(const Section& section) {
         section.fail("max-cuts", "must be a whole number in [0, 30], got " + formatNumber(cuts));
       settings.maxCuts = int(cuts);
     }
+    settings.amgReuse = section.number("amg-reuse", settings.amgReuse);
+    if (!(settings.amgReuse == 0.0 || (settings.amgReuse >= 1.0 && settings.amgReuse <= 100.0)))
+      section.fail("amg-reuse", "must be 0 (rebuild the multigrid hierarchy at every Newton iteration) or a growth "
+                                "factor in [1, 100], got " + formatNumber(settings.amgReuse));
   }
   return solver;
 }

@@ -178,6 +178,7 @@ ImplicitRunSummary runImplicit(const model::Model& model, const std::string& out
     phases.update += report.seconds.update;
     summary.newtonIterations += report.newtonIterations;
     summary.linearIterations += report.linearIterations;
+    summary.preconditionerBuilds += report.preconditionerBuilds;
     const bool last = increment == increments;
     if (last || increment % deck.output.historyEvery == 0)
       summary.maxDisplacement = output.appendHistory(increment, report);
@@ -198,7 +199,10 @@ ImplicitRunSummary runImplicit(const model::Model& model, const std::string& out
       .add("  internal forces", formatNumber(phases.residual) + " s")
       .add("  tangent assembly", formatNumber(phases.assembly) + " s")
       .add("  constraints", formatNumber(phases.constraints) + " s")
-      .add("  preconditioner", formatNumber(phases.preconditioner) + " s")
+      .add("  preconditioner", formatNumber(phases.preconditioner) + " s" +
+                                   (summary.preconditionerBuilds > 0
+                                        ? " (" + std::to_string(summary.preconditionerBuilds) + " AMG builds)"
+                                        : std::string()))
       .add("  linear solve", formatNumber(phases.linearSolve) + " s")
       .add("  update", formatNumber(phases.update) + " s")
       .add("setup", formatNumber(setupSeconds) + " s")

@@ -185,6 +185,9 @@ struct ImplicitSettings {
   Preconditioner preconditioner = Preconditioner::Amg;  // 10-100x fewer PCG iterations on thin shells (docs/implicit.md)
   int maxCuts = 8;  // bisections of an increment Newton fails on, before the run stops
   Tangent tangent = Tangent::Auto;
+  // Newton reuses the AMG hierarchy while its Krylov iterations stay within this factor of
+  // those right after a rebuild; 0 rebuilds it every iteration (solvers::NewtonOptions).
+  double amgReuse = 1.5;
 };
 
 struct Solver {

@@ -14,6 +14,7 @@ struct ImplicitRunSummary {
   int increments = 0;
   int cuts = 0;
   long long newtonIterations = 0, linearIterations = 0;
+  long long preconditionerBuilds = 0;
   double wallSeconds = 0.0;
   double maxDisplacement = 0.0;  // largest |u| of a node at the end [m]
   std::string xdmfPath, historyPath;

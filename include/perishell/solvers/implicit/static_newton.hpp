@@ -59,6 +59,13 @@ struct NewtonOptions {
   // Sze 3.2 (tstStaticNewton).
   TangentForm tangent = TangentForm::Symmetric;
   int maxLinearIterations = 20000;
+  // The AMG hierarchy is rebuilt at the first Newton iteration of every attempt and reused
+  // for the later ones while the tangent changes little: until a solve needs more than
+  // amgReuseGrowth times the Krylov iterations of the solve right after the rebuild, or fails
+  // (then it is rebuilt and that solve repeated). 0 rebuilds it at every iteration. The
+  // rebuild (Galerkin products, lambda_max, coarse inverse) costs as much as a few dozen
+  // PCG iterations (docs/implicit.md).
+  double amgReuseGrowth = 1.5;
 };
 
 // Newton gave up on an increment after every allowed cut; the state is the last converged one.
@@ -83,6 +90,7 @@ struct IncrementReport {
   double loadFactor = 0.0;
   int attempts = 0, cuts = 0, newtonIterations = 0;
   long long linearIterations = 0;
+  int preconditionerBuilds = 0;  // AMG hierarchies built or updated (NewtonOptions::amgReuseGrowth)
   double relativeResidual = 0.0;
   // Whether the last increment converged on the displacement increment rather than the residual.
   bool convergedOnDisplacement = false;
@@ -238,16 +246,18 @@ class StaticNewtonSolver {
       const Matrix K("perishell::newton::tangent", numRows, numRows, static_cast<RowOffset>(values_.extent(0)), values_,
                      pattern_.rowMap, pattern_.columns);
       const VectorView<Memory> solution = flatCorrection();
-      Kokkos::deep_copy(space_, solution, 0.0);
       belos::CgResult result;
       std::string linearFailure;
       try {
-        start = Clock::now();
-        const auto preconditioner = preconditionerFor(K, linear);
-        report.seconds.preconditioner += detail::secondsSince(space_, start);
-        start = Clock::now();
-        result = belos::solveCg<ExecutionSpaceT>(K, rhs, solution, linear, preconditioner);
-        report.seconds.linearSolve += detail::secondsSince(space_, start);
+        const bool reuse =
+            iteration > 0 && multigridReusable_ && options_.preconditioner == belos::CgOptions::Preconditioner::Amg;
+        try {
+          result = solveLinear(K, rhs, solution, linear, !reuse, report);
+          if (reuse && !result.converged) result = solveLinear(K, rhs, solution, linear, true, report);
+        } catch (const std::runtime_error&) {
+          if (!reuse) throw;
+          result = solveLinear(K, rhs, solution, linear, true, report);
+        }
         if (!result.converged && !(result.achievedTolerance < 1e-2))
           linearFailure = "the linear solve did not converge (" + std::to_string(result.iterations) + " " +
                           result.method + " iterations, relative residual " +
@@ -261,7 +271,6 @@ class StaticNewtonSolver {
                             "; check the supports: the model must not be free to move as a rigid body or a mechanism");
       if (!linearFailure.empty()) return linearFailure;
       ++report.newtonIterations;
-      report.linearIterations += result.iterations;
       start = Clock::now();
       applyCorrection();
       lastCorrection = largestTranslation(false);
@@ -333,17 +342,41 @@ class StaticNewtonSolver {
     return std::sqrt(squared);
   }
 
-  // The block-Jacobi family is rebuilt from K; the multigrid hierarchy is built once (its
-  // aggregates and product patterns depend only on the pattern) and updated with K and the
-  // current node positions (its rigid-body modes).
-  Teuchos::RCP<const Belos::Operator<double>> preconditionerFor(const Matrix& K, const belos::CgOptions& linear) {
-    if (options_.preconditioner != belos::CgOptions::Preconditioner::Amg) return belos::detail::makePreconditioner(K, linear);
-    updateCurrentPositions();
-    if (multigrid_)
-      multigrid_->update(K, currentPositions_);
-    else
-      multigrid_ = std::make_shared<multigrid::SmoothedAggregationPreconditioner<ExecutionSpaceT>>(space_, K, currentPositions_);
-    return Teuchos::rcp<const Belos::Operator<double>>(multigrid_.get(), false);
+  // K du = rhs from du = 0 with a preconditioner for K. The block-Jacobi family is rebuilt
+  // from K every time; the multigrid hierarchy is built once (its aggregates and product
+  // patterns depend only on the pattern), then updated with K and the current node positions
+  // (its rigid-body modes) when refresh is set, else reused (NewtonOptions::amgReuseGrowth).
+  belos::CgResult solveLinear(const Matrix& K, const VectorView<Memory>& rhs, const VectorView<Memory>& solution,
+                              const belos::CgOptions& linear, bool refresh, IncrementReport& report) {
+    using Clock = std::chrono::steady_clock;
+    auto start = Clock::now();
+    Teuchos::RCP<const Belos::Operator<double>> preconditioner;
+    if (options_.preconditioner != belos::CgOptions::Preconditioner::Amg) {
+      preconditioner = belos::detail::makePreconditioner(K, linear);
+    } else {
+      if (!multigrid_ || refresh) updateCurrentPositions();
+      if (!multigrid_ || refresh) ++report.preconditionerBuilds;
+      if (!multigrid_)
+        multigrid_ = std::make_shared<multigrid::SmoothedAggregationPreconditioner<ExecutionSpaceT>>(space_, K, currentPositions_);
+      else if (refresh)
+        multigrid_->update(K, currentPositions_);
+      preconditioner = Teuchos::rcp<const Belos::Operator<double>>(multigrid_.get(), false);
+    }
+    report.seconds.preconditioner += detail::secondsSince(space_, start);
+    Kokkos::deep_copy(space_, solution, 0.0);
+    // A reused hierarchy gets no more iterations than it may need before it is rebuilt.
+    belos::CgOptions limited = linear;
+    if (!refresh && options_.preconditioner == belos::CgOptions::Preconditioner::Amg)
+      limited.maxIterations = std::min(
+          linear.maxIterations, static_cast<int>(std::ceil(options_.amgReuseGrowth * std::max(iterationsAfterRebuild_, 1))));
+    start = Clock::now();
+    const belos::CgResult result = belos::solveCg<ExecutionSpaceT>(K, rhs, solution, limited, preconditioner);
+    report.seconds.linearSolve += detail::secondsSince(space_, start);
+    report.linearIterations += result.iterations;
+    if (refresh) iterationsAfterRebuild_ = result.iterations;
+    multigridReusable_ = options_.amgReuseGrowth > 0.0 &&
+                         result.iterations <= options_.amgReuseGrowth * std::max(iterationsAfterRebuild_, 1);
+    return result;
   }
 
   void updateCurrentPositions() {
@@ -459,6 +492,8 @@ class StaticNewtonSolver {
   VectorView<Memory> values_;
   CoordinateView<Memory> currentPositions_;
   std::shared_ptr<multigrid::SmoothedAggregationPreconditioner<ExecutionSpaceT>> multigrid_;
+  bool multigridReusable_ = false;
+  int iterationsAfterRebuild_ = 0;
   double loadFactor_ = 0.0;
 };
 

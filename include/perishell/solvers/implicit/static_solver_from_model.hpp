@@ -37,6 +37,7 @@ StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& spac
   options.maxIterations = settings.maxIterations;
   options.tolerance = settings.tolerance;
   options.maxCuts = settings.maxCuts;
+  options.amgReuseGrowth = settings.amgReuse;
   switch (settings.preconditioner) {
     case deck::Preconditioner::Jacobi: options.preconditioner = belos::CgOptions::Preconditioner::Jacobi; break;
     case deck::Preconditioner::BlockJacobi: options.preconditioner = belos::CgOptions::Preconditioner::BlockJacobi; break;

@@ -85,9 +85,21 @@ inline Aggregates aggregateNodes(const HostNodeGraph& graph) {
       if (phaseOne[*it] != none) links[phaseOne[*it]] = 0;
     result.aggregateOf[node] = best;
   }
-  // Phase 3: whatever has no aggregated neighbour is an aggregate of its own.
-  for (LocalIndex node = 0; node < numNodes; ++node)
-    if (result.aggregateOf[node] == none) result.aggregateOf[node] = result.numAggregates++;
+  // Phase 3: whatever has no aggregated neighbour is an aggregate of its own, except nodes
+  // coupled to nothing (supported on every DOF: their near-null rows are zero), which all
+  // share one. Kept apart, a clamped edge's nodes stayed one coarse node each on every level,
+  // coarsening stalled at their count, and the dense coarse levels cost seconds per update.
+  LocalIndex decoupled = none;
+  for (LocalIndex node = 0; node < numNodes; ++node) {
+    if (result.aggregateOf[node] != none) continue;
+    const auto [first, last] = neighbours(node);
+    if (std::any_of(first, last, [&](LocalIndex m) { return m != node; })) {
+      result.aggregateOf[node] = result.numAggregates++;
+    } else {
+      if (decoupled == none) decoupled = result.numAggregates++;
+      result.aggregateOf[node] = decoupled;
+    }
+  }
 
   result.offsets.assign(result.numAggregates + 1, 0);
   for (LocalIndex node = 0; node < numNodes; ++node) ++result.offsets[result.aggregateOf[node] + 1];

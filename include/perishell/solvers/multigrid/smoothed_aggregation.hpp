@@ -311,7 +311,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
                                   ": options need maxCoarseNodes, maxLevels, chebyshevDegree, powerIterations >= 1 "
                                   "and chebyshevEigenRatio > 1");
     levels_.emplace_back();
-    levels_[0].A = A;
+    snapshotFineMatrix(A);
     levels_[0].nearNullSpace = near_null_space_type("perishell::amg::near_null_space_0", A.numRows());
     detail::rigidBodyModes(space_, A, positions, levels_[0].nearNullSpace);
     for (std::size_t l = 0;; ++l) {
@@ -334,7 +334,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     if (A.nnz() != levels_[0].A.nnz())
       throw std::invalid_argument(std::string(who) + "::update: the matrix has " + std::to_string(A.nnz()) +
                                   " entries, the hierarchy was built for " + std::to_string(levels_[0].A.nnz()));
-    levels_[0].A = A;
+    snapshotFineMatrix(A);
     detail::rigidBodyModes(space_, A, positions, levels_[0].nearNullSpace);
     for (std::size_t l = 0; l + 1 < levels_.size(); ++l) computeTransfer(l);
     factorCoarsest();
@@ -450,6 +450,17 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     level.AP = productPattern(level.A, level.P, "perishell::amg::ap_" + tag);
     levels_[l + 1].A = productPattern(level.R, level.AP, "perishell::amg::a_" + nextTag);
     computeGalerkin(l);
+  }
+
+  // The hierarchy keeps its own copy of the fine values: a caller that reassembles A in place
+  // and reuses the hierarchy (Newton, static_newton.hpp) would otherwise pair new fine
+  // values with the old smoother bounds and coarse levels, which can make the V-cycle
+  // indefinite.
+  void snapshotFineMatrix(const matrix_type& A) {
+    if (fineValues_.extent(0) != A.values.extent(0))
+      fineValues_ = typename matrix_type::values_type::non_const_type("perishell::amg::a_0 values", A.values.extent(0));
+    Kokkos::deep_copy(space_, fineValues_, A.values);
+    levels_[0].A = matrix_type("perishell::amg::a_0", A.numCols(), fineValues_, A.graph);
   }
 
   template <class T, class DeviceView>
@@ -606,6 +617,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
   ExecutionSpaceT space_;
   SmoothedAggregationOptions options_;
   std::vector<Level> levels_;
+  typename matrix_type::values_type::non_const_type fineValues_;
   Kokkos::View<double**, Kokkos::LayoutLeft, detail::DeviceOf<ExecutionSpaceT>> coarseInverse_;
 };
 
