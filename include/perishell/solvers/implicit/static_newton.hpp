@@ -249,15 +249,7 @@ class StaticNewtonSolver {
       belos::CgResult result;
       std::string linearFailure;
       try {
-        const bool reuse =
-            iteration > 0 && multigridReusable_ && options_.preconditioner == belos::CgOptions::Preconditioner::Amg;
-        try {
-          result = solveLinear(K, rhs, solution, linear, !reuse, report);
-          if (reuse && !result.converged) result = solveLinear(K, rhs, solution, linear, true, report);
-        } catch (const std::runtime_error&) {
-          if (!reuse) throw;
-          result = solveLinear(K, rhs, solution, linear, true, report);
-        }
+        result = solveLinear(K, rhs, solution, linear, iteration == 0, report);
         if (!result.converged && !(result.achievedTolerance < 1e-2))
           linearFailure = "the linear solve did not converge (" + std::to_string(result.iterations) + " " +
                           result.method + " iterations, relative residual " +
@@ -342,41 +334,65 @@ class StaticNewtonSolver {
     return std::sqrt(squared);
   }
 
-  // K du = rhs from du = 0 with a preconditioner for K. The block-Jacobi family is rebuilt
-  // from K every time; the multigrid hierarchy is built once (its aggregates and product
-  // patterns depend only on the pattern), then updated with K and the current node positions
-  // (its rigid-body modes) when refresh is set, else reused (NewtonOptions::amgReuseGrowth).
+  // K du = rhs. The multigrid hierarchy of the last solve is reused unless this is an
+  // attempt's first iteration or the last solve needed too many iterations
+  // (NewtonOptions::amgReuseGrowth); a reused hierarchy that fails is rebuilt and the solve
+  // repeated. Throws what the solve with a fresh preconditioner throws.
   belos::CgResult solveLinear(const Matrix& K, const VectorView<Memory>& rhs, const VectorView<Memory>& solution,
-                              const belos::CgOptions& linear, bool refresh, IncrementReport& report) {
+                              const belos::CgOptions& linear, bool attemptStart, IncrementReport& report) {
+    if (options_.preconditioner == belos::CgOptions::Preconditioner::Amg && !attemptStart && multigridReusable_) {
+      try {
+        const belos::CgResult result = solveOnce(K, rhs, solution, linear, false, report);
+        if (result.converged) return result;
+      } catch (const std::runtime_error&) {
+        // A breakdown with the old hierarchy says nothing about the new tangent: rebuild.
+      }
+    }
+    return solveOnce(K, rhs, solution, linear, true, report);
+  }
+
+  // K du = rhs from du = 0. rebuild: the block-Jacobi family is rebuilt from K; the multigrid
+  // hierarchy is built once (its aggregates and product patterns depend only on the pattern)
+  // and updated with K and the current node positions (its rigid-body modes). Without
+  // rebuild the hierarchy is reused, with no more PCG iterations than the reuse allows.
+  belos::CgResult solveOnce(const Matrix& K, const VectorView<Memory>& rhs, const VectorView<Memory>& solution,
+                            const belos::CgOptions& linear, bool rebuild, IncrementReport& report) {
     using Clock = std::chrono::steady_clock;
+    const bool amg = options_.preconditioner == belos::CgOptions::Preconditioner::Amg;
     auto start = Clock::now();
+    belos::CgOptions limited = linear;
     Teuchos::RCP<const Belos::Operator<double>> preconditioner;
-    if (options_.preconditioner != belos::CgOptions::Preconditioner::Amg) {
+    if (!amg) {
       preconditioner = belos::detail::makePreconditioner(K, linear);
     } else {
-      if (!multigrid_ || refresh) updateCurrentPositions();
-      if (!multigrid_ || refresh) ++report.preconditionerBuilds;
-      if (!multigrid_)
-        multigrid_ = std::make_shared<multigrid::SmoothedAggregationPreconditioner<ExecutionSpaceT>>(space_, K, currentPositions_);
-      else if (refresh)
-        multigrid_->update(K, currentPositions_);
+      if (!multigrid_ || rebuild) {
+        ++report.preconditionerBuilds;
+        updateCurrentPositions();
+        if (multigrid_)
+          multigrid_->update(K, currentPositions_);
+        else
+          multigrid_ =
+              std::make_shared<multigrid::SmoothedAggregationPreconditioner<ExecutionSpaceT>>(space_, K, currentPositions_);
+      } else {
+        limited.maxIterations = std::min(linear.maxIterations, reuseIterationLimit());
+      }
       preconditioner = Teuchos::rcp<const Belos::Operator<double>>(multigrid_.get(), false);
     }
     report.seconds.preconditioner += detail::secondsSince(space_, start);
     Kokkos::deep_copy(space_, solution, 0.0);
-    // A reused hierarchy gets no more iterations than it may need before it is rebuilt.
-    belos::CgOptions limited = linear;
-    if (!refresh && options_.preconditioner == belos::CgOptions::Preconditioner::Amg)
-      limited.maxIterations = std::min(
-          linear.maxIterations, static_cast<int>(std::ceil(options_.amgReuseGrowth * std::max(iterationsAfterRebuild_, 1))));
     start = Clock::now();
     const belos::CgResult result = belos::solveCg<ExecutionSpaceT>(K, rhs, solution, limited, preconditioner);
     report.seconds.linearSolve += detail::secondsSince(space_, start);
     report.linearIterations += result.iterations;
-    if (refresh) iterationsAfterRebuild_ = result.iterations;
-    multigridReusable_ = options_.amgReuseGrowth > 0.0 &&
-                         result.iterations <= options_.amgReuseGrowth * std::max(iterationsAfterRebuild_, 1);
+    if (amg) {
+      if (rebuild) iterationsAfterRebuild_ = result.iterations;
+      multigridReusable_ = options_.amgReuseGrowth > 0.0 && result.iterations <= reuseIterationLimit();
+    }
     return result;
+  }
+
+  int reuseIterationLimit() const {
+    return static_cast<int>(std::ceil(options_.amgReuseGrowth * std::max(iterationsAfterRebuild_, 1)));
   }
 
   void updateCurrentPositions() {
