@@ -102,10 +102,15 @@ CoupledBodies<typename ExecutionSpaceT::memory_space> makeCoupledBodies(
   bodies.pdNodes = Kokkos::View<LocalIndex*, Kokkos::HostSpace>("coupling pd nodes", numBodyNodes);
   for (LocalIndex node = 0, k = 0; node < numNodes; ++node)
     if (hostAlpha(node) > 0.0) bodies.pdNodes(k++) = node;
+  // A node nearer than delta to a node with alpha = 0 lies beyond distance L_c - delta from
+  // the PD nodes (triangle inequality), where alpha <= profile(1 - delta / L_c).
+  Kokkos::View<std::uint8_t*, Kokkos::HostSpace> atCcmInterface("coupling nodes at the ccm interface", numBodyNodes);
+  const double interfaceAlpha = transitionProfile(inputs.transition.profile, 1.0 - inputs.horizon / width);
+  for (LocalIndex k = 0; k < numBodyNodes; ++k) atCcmInterface(k) = hostAlpha(bodies.pdNodes(k)) <= interfaceAlpha;
   // No bond carrier (0 % PD): an empty body, and no microbeam checks (a pure CCM model may have nu > 1/3).
   if (numBodyNodes > 0)
     bodies.pdBody = pd::makePdBody(space, hostMesh, bodies.pdNodes, inputs.material, inputs.horizon,
-                                   inputs.gridSpacing, inputs.preCracks);
+                                   inputs.gridSpacing, inputs.preCracks, atCcmInterface);
   else
     bodies.pdBody = emptyPdBody<MemorySpaceT>();
 

@@ -8,6 +8,7 @@
 #include <perishell/core/rotation.hpp>
 #include <perishell/pd/pd_body.hpp>
 
+#include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -34,28 +35,58 @@ KOKKOS_INLINE_FUNCTION void tangentBasis(const double n[3], double t1[3], double
   rotation::cross(n, t1, t2);
 }
 
-// cos 4 theta and sin 4 theta of the direction d projected on the tangent plane (t1, t2);
-// zero for a direction along the normal. No trigonometry: from cos 2 theta and sin 2 theta.
-KOKKOS_INLINE_FUNCTION void fourthHarmonics(const double d[3], const double t1[3], const double t2[3],
-                                            double& cosine4, double& sine4) {
+// The angular harmonics cos 2theta, sin 2theta, cos 4theta, sin 4theta of the direction d
+// projected on the tangent plane (t1, t2); zero for a direction along the normal. No
+// trigonometry: the fourth from the second by the double-angle formulas.
+constexpr int numHarmonics = 4;
+KOKKOS_INLINE_FUNCTION void angularHarmonics(const double d[3], const double t1[3], const double t2[3],
+                                             double harmonics[numHarmonics]) {
   const double u = rotation::dot(d, t1), v = rotation::dot(d, t2);
   const double squared = u * u + v * v;
   if (!(squared > 0.0)) {
-    cosine4 = sine4 = 0.0;
+    for (int k = 0; k < numHarmonics; ++k) harmonics[k] = 0.0;
     return;
   }
   const double cosine2 = (u * u - v * v) / squared, sine2 = 2.0 * u * v / squared;
-  cosine4 = cosine2 * cosine2 - sine2 * sine2;
-  sine4 = 2.0 * sine2 * cosine2;
+  harmonics[0] = cosine2;
+  harmonics[1] = sine2;
+  harmonics[2] = cosine2 * cosine2 - sine2 * sine2;
+  harmonics[3] = 2.0 * sine2 * cosine2;
 }
 
-// The quadrature factor one end gives a bond of direction d, g (1 + b_c cos 4theta + b_s sin 4theta),
-// from the node's g, g b_c and g b_s.
+// The quadrature factor one end gives a bond of direction d, g (1 + sum_k a_k h_k(theta)),
+// from the node's factors g, g a_1, ..., g a_4.
 KOKKOS_INLINE_FUNCTION double endFactor(const double d[3], const double t1[3], const double t2[3],
-                                        const double factors[3]) {
-  double cosine4, sine4;
-  fourthHarmonics(d, t1, t2, cosine4, sine4);
-  return factors[0] + factors[1] * cosine4 + factors[2] * sine4;
+                                        const double factors[1 + numHarmonics]) {
+  double harmonics[numHarmonics];
+  angularHarmonics(d, t1, t2, harmonics);
+  double factor = factors[0];
+  for (int k = 0; k < numHarmonics; ++k) factor += factors[1 + k] * harmonics[k];
+  return factor;
+}
+
+// Solves the symmetric positive semi-definite n x n system A x = b in place by Cholesky
+// with a diagonal shift `regularisation`: directions A cannot see (a node whose bonds miss
+// some harmonic altogether) get no weight instead of an unbounded one.
+template <int n>
+KOKKOS_INLINE_FUNCTION void solveShiftedCholesky(double A[n][n], double b[n], double regularisation) {
+  for (int k = 0; k < n; ++k) A[k][k] += regularisation;
+  for (int c = 0; c < n; ++c) {
+    for (int k = 0; k < c; ++k) A[c][c] -= A[c][k] * A[c][k];
+    A[c][c] = Kokkos::Experimental::sqrt(A[c][c]);
+    for (int r = c + 1; r < n; ++r) {
+      for (int k = 0; k < c; ++k) A[r][c] -= A[r][k] * A[c][k];
+      A[r][c] /= A[c][c];
+    }
+  }
+  for (int r = 0; r < n; ++r) {
+    for (int k = 0; k < r; ++k) b[r] -= A[r][k] * b[k];
+    b[r] /= A[r][r];
+  }
+  for (int r = n - 1; r >= 0; --r) {
+    for (int k = r + 1; k < n; ++k) b[r] -= A[k][r] * b[k];
+    b[r] /= A[r][r];
+  }
 }
 }  // namespace detail
 
@@ -66,80 +97,96 @@ KOKKOS_INLINE_FUNCTION double endFactor(const double d[3], const double t1[3], c
 // 1/2 c_by xi (n.kappa.n)^2 + 1/2 c_tor xi (t.kappa.n)^2. In the angle theta of n these are
 // c_ax, c_by, c_tor sums weighted by w = xi V_j beta and a c_bz sum weighted by
 // w = V_j beta / xi, of 1, cos 2theta, sin 2theta, cos 4theta, sin 4theta. The micromoduli
-// were calibrated on continuum integrals, where only the constant moment is non-zero; the
-// discrete sums with delta = 3 dx fall 13 % short in the constant moment and, on a square
-// lattice, carry a fourth harmonic (bonds along the axes against the diagonals). The
-// fourth harmonic enters with opposite signs through (n.eps.n)^2 and (t.eps.n)^2, so it
-// only cancels where c_bz = 0 (nu = 1/3); elsewhere it showed as 7 % in shear at nu = 0.
+// were calibrated on continuum integrals, where only the constant moment is non-zero. The
+// discrete sums with delta = 3 dx fall 13 % short in the constant moment; a square lattice
+// adds a fourth harmonic (bonds along the axes against the diagonals), 7 % in shear at
+// nu = 0; and a node within delta of a free edge or pre-crack misses the bonds that point
+// out of the body, a second harmonic: boosting its other bonds evenly stiffened a strip
+// 8 spacings wide by 6 % in bending along it.
 // So each node, for each of the two weightings, weights its bonds by
-//   g (1 + b_c cos 4theta + b_s sin 4theta),
-// theta measured in the node's tangent plane (any flat or curved mesh), (b_c, b_s) chosen
-// to cancel the weighted fourth harmonic (a 2x2 solve) and g to make the weighted constant
-// moment equal its continuum value (t 2 pi delta^3 / 3 for xi, t 2 pi delta for 1/xi).
-// Interior nodes of a symmetric lattice then store the plate energy exactly (the second
-// harmonic vanishes by symmetry). |(b_c, b_s)| is capped at 1/2, which keeps every weight
-// at least half of g; the cap only acts at nodes near edges and pre-cracks, whose boost by
-// g is the classical surface correction (pre-crack bonds count as missing). A bond's scale
-// is the mean of its two ends' factors.
+//   g (1 + a_c cos 2theta + a_s sin 2theta + b_c cos 4theta + b_s sin 4theta),
+// theta measured in the node's tangent plane (any flat or curved mesh), the four harmonic
+// weights chosen to cancel the weighted harmonics (a 4x4 solve) and g to make the weighted
+// constant moment equal its continuum value (t 2 pi delta^3 / 3 for xi, t 2 pi delta for
+// 1/xi). Every node's bonds then store the plate energy of any homogeneous strain or
+// curvature exactly, edge nodes included; interior nodes of a symmetric lattice need no
+// second harmonic. |a| + |b| is capped at 1/2, which keeps every weight at least half of g.
+// A bond's scale is the mean of its two ends' factors: the total energy is still the sum
+// of the nodes' exact ones, since each bond's energy is shared by both ends.
+// nodesAtCcmInterface (per body node; empty: none) marks nodes whose horizon reaches past
+// the body into CCM elements (the outer edge of a coupling transition, model.md §4). Their
+// missing neighbours are not free surface and the morphing weights them out anyway
+// (coupling/morphing.hpp), so they fit no second harmonic: g and the fourth harmonic only.
 template <class ExecutionSpaceT, class MemorySpaceT>
 void computeStiffnessScales(const ExecutionSpaceT& space, PdBody<MemorySpaceT>& body, double horizon,
-                            double thickness) {
+                            double thickness,
+                            const Kokkos::View<const std::uint8_t*, MemorySpaceT>& nodesAtCcmInterface = {}) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
+  using detail::numHarmonics;
   const double pi = 3.14159265358979323846;
   const double continuumMoment[2] = {thickness * 2.0 * pi * horizon * horizon * horizon / 3.0,
                                      thickness * 2.0 * pi * horizon};
   constexpr double largestHarmonicWeight = 0.5;
-  // Per node and weighting: g, g b_c, g b_s.
-  Kokkos::View<double* [2][3], Kokkos::LayoutRight, MemorySpaceT> nodeFactors("pd node quadrature factors",
-                                                                              body.numNodes());
+  // Per node and weighting: g, g a_c, g a_s, g b_c, g b_s.
+  Kokkos::View<double* [2][1 + numHarmonics], Kokkos::LayoutRight, MemorySpaceT> nodeFactors(
+      "pd node quadrature factors", body.numNodes());
   const auto bonds = body.bonds;
   const auto volumes = body.volumes;
   const auto positions = body.referencePositions;
   const auto normals = body.referenceNormals;
+  const bool anyAtInterface = nodesAtCcmInterface.extent(0) > 0;
+  if (anyAtInterface && nodesAtCcmInterface.extent(0) != static_cast<std::size_t>(body.numNodes()))
+    throw std::invalid_argument("computeStiffnessScales: the CCM interface mask has " +
+                                std::to_string(nodesAtCcmInterface.extent(0)) + " entries for " +
+                                std::to_string(body.numNodes()) + " nodes");
   Kokkos::parallel_for(
       "perishell::pd::computeStiffnessScales::nodes", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numNodes()),
       KOKKOS_LAMBDA(const LocalIndex node) {
         const double n[3] = {normals(node, 0), normals(node, 1), normals(node, 2)};
         double t1[3], t2[3];
         detail::tangentBasis(n, t1, t2);
-        // Per weighting: sum w, w c4, w s4, w c4^2, w c4 s4, w s4^2.
-        double sums[2][6] = {};
+        // Per weighting: sum w, sum w h_k, sum w h_k h_l.
+        double total[2] = {}, moments[2][numHarmonics] = {}, products[2][numHarmonics][numHarmonics] = {};
         for (RowOffset entry = bonds.offsets(node); entry < bonds.offsets(node + 1); ++entry) {
           const LocalIndex neighbour = bonds.neighbours(entry);
           const RowOffset b = bonds.fullToHalf(entry);
           const double d[3] = {positions(neighbour, 0) - positions(node, 0), positions(neighbour, 1) - positions(node, 1),
                                positions(neighbour, 2) - positions(node, 2)};
-          double c4, s4;
-          detail::fourthHarmonics(d, t1, t2, c4, s4);
+          double h[numHarmonics];
+          detail::angularHarmonics(d, t1, t2, h);
           const double volume = volumes(neighbour) * bonds.volumeFactor(b), xi = bonds.referenceLength(b);
           const double w[2] = {volume * xi, volume / xi};
           for (int m = 0; m < 2; ++m) {
-            sums[m][0] += w[m];
-            sums[m][1] += w[m] * c4;
-            sums[m][2] += w[m] * s4;
-            sums[m][3] += w[m] * c4 * c4;
-            sums[m][4] += w[m] * c4 * s4;
-            sums[m][5] += w[m] * s4 * s4;
-          }
-        }
-        for (int m = 0; m < 2; ++m) {
-          const double* S = sums[m];
-          const double determinant = S[3] * S[5] - S[4] * S[4];
-          double bc = 0.0, bs = 0.0;
-          if (determinant > 1e-12 * S[0] * S[0]) {
-            bc = -(S[5] * S[1] - S[4] * S[2]) / determinant;
-            bs = -(S[3] * S[2] - S[4] * S[1]) / determinant;
-            const double amplitude = Kokkos::Experimental::sqrt(bc * bc + bs * bs);
-            if (amplitude > largestHarmonicWeight) {
-              bc *= largestHarmonicWeight / amplitude;
-              bs *= largestHarmonicWeight / amplitude;
+            total[m] += w[m];
+            for (int k = 0; k < numHarmonics; ++k) {
+              moments[m][k] += w[m] * h[k];
+              for (int l = 0; l < numHarmonics; ++l) products[m][k][l] += w[m] * h[k] * h[l];
             }
           }
-          const double weighted = S[0] + bc * S[1] + bs * S[2];
+        }
+        if (anyAtInterface && nodesAtCcmInterface(node))
+          for (int m = 0; m < 2; ++m)
+            for (int k = 0; k < 2; ++k) {  // the second harmonic's rows: a_k = 0
+              moments[m][k] = 0.0;
+              for (int l = 0; l < numHarmonics; ++l) products[m][k][l] = products[m][l][k] = 0.0;
+              products[m][k][k] = total[m];
+            }
+        for (int m = 0; m < 2; ++m) {
+          // sum w (1 + a.h) h_k = 0 for every k: products a = -moments.
+          double a[numHarmonics];
+          for (int k = 0; k < numHarmonics; ++k) a[k] = -moments[m][k];
+          detail::solveShiftedCholesky<numHarmonics>(products[m], a, 1e-10 * total[m]);
+          const double amplitude = Kokkos::Experimental::sqrt(a[0] * a[0] + a[1] * a[1]) +
+                                   Kokkos::Experimental::sqrt(a[2] * a[2] + a[3] * a[3]);
+          const double cap = amplitude > largestHarmonicWeight ? largestHarmonicWeight / amplitude : 1.0;
+          double weighted = total[m];
+          for (int k = 0; k < numHarmonics; ++k) {
+            a[k] *= cap;
+            weighted += a[k] * moments[m][k];
+          }
           const double g = weighted > 0.0 ? continuumMoment[m] / weighted : 1.0;
           nodeFactors(node, m, 0) = g;
-          nodeFactors(node, m, 1) = g * bc;
-          nodeFactors(node, m, 2) = g * bs;
+          for (int k = 0; k < numHarmonics; ++k) nodeFactors(node, m, 1 + k) = g * a[k];
         }
       });
   body.stiffnessScale = decltype(body.stiffnessScale)("pd stiffness scale", bonds.numBonds());
@@ -148,7 +195,7 @@ void computeStiffnessScales(const ExecutionSpaceT& space, PdBody<MemorySpaceT>& 
       "perishell::pd::computeStiffnessScales::bonds", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, bonds.numBonds()),
       KOKKOS_LAMBDA(const RowOffset b) {
         const LocalIndex ends[2] = {bonds.halfBonds(b, 0), bonds.halfBonds(b, 1)};
-        // cos 4theta and sin 4theta do not change when the direction reverses.
+        // The harmonics are even: they do not change when the direction reverses.
         const double d[3] = {positions(ends[1], 0) - positions(ends[0], 0), positions(ends[1], 1) - positions(ends[0], 1),
                              positions(ends[1], 2) - positions(ends[0], 2)};
         for (int m = 0; m < 2; ++m) {
@@ -157,7 +204,8 @@ void computeStiffnessScales(const ExecutionSpaceT& space, PdBody<MemorySpaceT>& 
             const double n[3] = {normals(node, 0), normals(node, 1), normals(node, 2)};
             double t1[3], t2[3];
             detail::tangentBasis(n, t1, t2);
-            const double factors[3] = {nodeFactors(node, m, 0), nodeFactors(node, m, 1), nodeFactors(node, m, 2)};
+            double factors[1 + numHarmonics];
+            for (int k = 0; k <= numHarmonics; ++k) factors[k] = nodeFactors(node, m, k);
             sum += detail::endFactor(d, t1, t2, factors);
           }
           scale(b, m) = 0.5 * sum;
@@ -194,13 +242,15 @@ PdNodeBonds<typename ExecutionSpaceT::memory_space> buildBondsAmong(
   return result;
 }
 
-// The PD body of the nodes pdNodes (as buildBondsAmong). Throws std::invalid_argument on
-// parameters the model rejects.
+// The PD body of the nodes pdNodes (as buildBondsAmong). nodesAtCcmInterface: per entry of
+// pdNodes, or empty (computeStiffnessScales). Throws std::invalid_argument on parameters the
+// model rejects.
 template <class ExecutionSpaceT>
 PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
     const ExecutionSpaceT& space, const mesh::HostQuadMesh& hostMesh,
     const Kokkos::View<const LocalIndex*, Kokkos::HostSpace>& pdNodes, const PdMaterial& material, double horizon,
-    double gridSpacing, const std::vector<mesh::CrackSegment>& preCracks) {
+    double gridSpacing, const std::vector<mesh::CrackSegment>& preCracks,
+    const Kokkos::View<const std::uint8_t*, Kokkos::HostSpace>& nodesAtCcmInterface = {}) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   using MemorySpaceT = typename ExecutionSpaceT::memory_space;
   PdBody<MemorySpaceT> body;
@@ -228,7 +278,9 @@ PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
         for (int d = 0; d < 3; ++d) normals(k, d) = allNormals(nodes(k), d);
         volumes(k) = allVolumes(nodes(k));
       });
-  computeStiffnessScales(space, body, horizon, material.thickness);
+  computeStiffnessScales(space, body, horizon, material.thickness,
+                         Kokkos::View<const std::uint8_t*, MemorySpaceT>(
+                             Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, nodesAtCcmInterface)));
   return body;
 }
 
