@@ -20,7 +20,8 @@
 namespace {
 
 constexpr const char* usage = R"(usage: perishell [--help] [--version] [--backend-info]
-       perishell run DECK.yaml [--output DIR]
+       perishell run DECK.yaml [--output DIR] [--backend device|host] [--max-steps N]
+                               [--phase-times]
        perishell check DECK.yaml [--output DIR]
        perishell membrane [options]
 
@@ -29,9 +30,16 @@ Commands:
                   device with progress lines (step, time, ETA), write DIR/results.xmf (+ .h5
                   per output step) and DIR/history.csv, and print a summary table.
                   DIR is output.directory of the deck unless --output DIR is given. Explicit
-                  decks run 100 % PD; implicit decks (Newton, load increments) run CCM-only
-                  or 100 % PD. Exit 1 with the reason on a bad deck, an unstable explicit
-                  run or an increment Newton cannot converge.
+                  and implicit decks run CCM-only, 100 % PD or mixed models. Also writes
+                  DIR/timings.csv (phase,seconds). Exit 1 with the reason on a bad deck, an
+                  unstable explicit run or an increment Newton cannot converge.
+      --backend B     device (default): the build's default device (CUDA in a CUDA build);
+                      host: its host space (OpenMP), the CPU baseline of the same kernels.
+                      In an OpenMP build both are the same.
+      --max-steps N   stop after N steps (explicit) or increments (implicit), keeping the
+                      deck's load schedule: a truncated run follows the full one
+      --phase-times   time the explicit step's phases (forces, integration, energy monitor)
+                      with a synchronisation after each; implicit phases are always timed
   check DECK      Validate a case deck (docs/deck.md), build its model — mesh, zones, PD
                   nodes and, on the device, the bonds — and print a model summary: nodes,
                   elements, PD ratio, bonds, DOF counts. Exit 1 with the deck key and the
@@ -118,17 +126,33 @@ std::string writeModelOutput(const std::string& directory, const perishell::mode
   return writer.xdmfPath();
 }
 
-// DECK [--output DIR] for the run and check commands.
+// DECK [--output DIR] for the run and check commands, and the run's options.
 struct DeckArguments {
-  std::string deckPath, outputDirectory;
+  std::string deckPath;
+  perishell::solvers::RunOptions run;
 };
 
 DeckArguments parseDeckArguments(const std::string& command, const std::vector<std::string>& args) {
   DeckArguments parsed;
+  const bool isRun = command == "run";
+  const auto valueOf = [&](std::size_t& i, const char* what) -> const std::string& {
+    if (i + 1 >= args.size()) throw UsageError("option " + args[i] + " needs " + what);
+    return args[++i];
+  };
   for (std::size_t i = 0; i < args.size(); ++i) {
     if (args[i] == "--output") {
-      if (i + 1 >= args.size()) throw UsageError("option --output needs a directory");
-      parsed.outputDirectory = args[++i];
+      parsed.run.outputDirectory = valueOf(i, "a directory");
+    } else if (isRun && args[i] == "--backend") {
+      const std::string& backend = valueOf(i, "device or host");
+      if (backend == "device") parsed.run.backend = perishell::solvers::Backend::Device;
+      else if (backend == "host") parsed.run.backend = perishell::solvers::Backend::Host;
+      else throw UsageError("option --backend: '" + backend + "' is not device or host");
+    } else if (isRun && args[i] == "--max-steps") {
+      const int steps = parseInteger("--max-steps", valueOf(i, "a number of steps"));
+      if (steps < 1) throw UsageError("option --max-steps: must be at least 1");
+      parsed.run.maxSteps = steps;
+    } else if (isRun && args[i] == "--phase-times") {
+      parsed.run.timePhases = true;
     } else if (parsed.deckPath.empty() && args[i].rfind("--", 0) != 0) {
       parsed.deckPath = args[i];
     } else {
@@ -140,7 +164,9 @@ DeckArguments parseDeckArguments(const std::string& command, const std::vector<s
 }
 
 int runCheck(const std::vector<std::string>& args) {
-  const auto [deckPath, outputDirectory] = parseDeckArguments("check", args);
+  const auto parsed = parseDeckArguments("check", args);
+  const std::string& deckPath = parsed.deckPath;
+  const std::string& outputDirectory = parsed.run.outputDirectory;
   const auto start = std::chrono::steady_clock::now();
   const perishell::Deck deck = perishell::readDeck(deckPath);
   const auto model = perishell::model::buildModel(deck);
@@ -188,9 +214,9 @@ int runDeck(const std::vector<std::string>& args) {
               withThousands(model.freeDofCount()).c_str());
   std::fflush(stdout);
   if (deck.solver.type == perishell::deck::SolverType::Explicit)
-    perishell::solvers::runExplicit(model, parsed.outputDirectory, std::cout);
+    perishell::solvers::runExplicit(model, parsed.run, std::cout);
   else
-    perishell::solvers::runImplicit(model, parsed.outputDirectory, std::cout);
+    perishell::solvers::runImplicit(model, parsed.run, std::cout);
   return 0;
 }
 

@@ -15,11 +15,11 @@
 #include <filesystem>
 #include <ostream>
 #include <sstream>
+#include <type_traits>
 
 namespace perishell::solvers {
 namespace {
 
-using Memory = MemorySpace;
 using HostVector3 = Kokkos::View<double* [3], Kokkos::LayoutRight, Kokkos::HostSpace>;
 
 // A node is on the crack when it has lost this share of its neighbour volume (docs/deck.md).
@@ -47,9 +47,11 @@ std::string formatSeconds(double seconds) {
 }
 
 // Writes fields and history rows of one run; copies device data only when called.
+template <class ExecutionSpaceT>
 class RunOutput {
  public:
-  RunOutput(const model::Model& model, const std::string& directory, const CentralDifferenceSolver<ExecutionSpace>& solver)
+  using Solver = CentralDifferenceSolver<ExecutionSpaceT>;
+  RunOutput(const model::Model& model, const std::string& directory, const Solver& solver)
       : model_(model),
         solver_(solver),
         writer_(createdDirectory(directory), "results", model.shell.mesh),
@@ -132,7 +134,7 @@ class RunOutput {
     history_->flush();
   }
 
-  void appendHistory(CentralDifferenceSolver<ExecutionSpace>& solver) {
+  void appendHistory(Solver& solver) {
     const auto& deck = model_.deck;
     std::vector<double> row = {double(solver.stepIndex()), solver.time()};
     for (const auto& curve : curves_) row.push_back(deck::evaluateCurve(*deck.findCurve(curve), solver.time()));
@@ -209,27 +211,27 @@ class RunOutput {
   }
 
   const model::Model& model_;
-  const CentralDifferenceSolver<ExecutionSpace>& solver_;
+  const Solver& solver_;
   io::XdmfTimeSeriesWriter writer_;
   std::optional<io::CsvHistory> history_;
-  VectorView<Memory> damage_;
+  VectorView<typename ExecutionSpaceT::memory_space> damage_;
   Kokkos::View<LocalIndex*, Kokkos::HostSpace> zoneNodes_;
   std::vector<std::string> curves_;
   std::array<double, 3> crackOrigin_{0.0, 0.0, 0.0};
   double lastTipTime_ = -1.0, lastTipDistance_ = 0.0;
 };
 
-}  // namespace
-
-ExplicitRunSummary runExplicit(const model::Model& model, const std::string& outputDirectory, std::ostream& log) {
+template <class ExecutionSpaceT>
+ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Model& model, const RunOptions& runOptions,
+                                 std::ostream& log) {
   requireRunnableModel(model);
+  using Clock = std::chrono::steady_clock;
   const auto& deck = model.deck;
   const auto& settings = deck.solver.explicitSettings;
-  const ExecutionSpace space;
-  const auto setupStart = std::chrono::steady_clock::now();
+  const auto setupStart = Clock::now();
   // Bonds where alpha > 0, shell elements where the model is CCM or in the transition (model.md §4);
   // with zones.adaptive the zone object owns them and grows the PD zone during the run.
-  std::optional<coupling::AdaptivePdZone<ExecutionSpace>> adaptive;
+  std::optional<coupling::AdaptivePdZone<ExecutionSpaceT>> adaptive;
   if (deck.zones.adaptive)
     adaptive.emplace(space, model.shell.mesh, model.elementIsPd, coupling::couplingInputs(model),
                      deck.zones.adaptive->strainFraction);
@@ -243,17 +245,22 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
   options.damping = settings.damping;
   options.forceKernel = deck.peridynamics.forceKernel;
   options.monitorEvery = std::min<long long>(100, deck.output.historyEvery);
-  CentralDifferenceSolver<ExecutionSpace> solver(space, body, bodies.shellElements(), makeExternalActions<Memory>(model),
-                                                 options);
-  const long long totalSteps =
+  options.timePhases = runOptions.timePhases;
+  CentralDifferenceSolver<ExecutionSpaceT> solver(space, body, bodies.shellElements(),
+                                                  makeExternalActions<typename ExecutionSpaceT::memory_space>(model),
+                                                  options);
+  const long long deckSteps =
       settings.steps ? *settings.steps
                      : std::max(1LL, static_cast<long long>(std::ceil(*settings.endTime / solver.timeStep() - 1e-9)));
-  const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - setupStart).count();
+  const long long totalSteps = std::min(deckSteps, runOptions.maxSteps.value_or(deckSteps));
+  const double setupSeconds = fencedSecondsSince(space, setupStart);
   log << "explicit: " << bodies.pdNodes.extent(0) << " PD nodes, " << body.bonds.numBonds() << " bonds, "
       << solver.numElements() << " shell elements on "
-      << ExecutionSpace::name() << "; dt = " << solver.timeStep() << " s (critical estimate "
+      << ExecutionSpaceT::name() << "; dt = " << solver.timeStep() << " s (critical estimate "
       << solver.criticalTimeStep() << " s), " << totalSteps << " steps to t = " << totalSteps * solver.timeStep()
       << " s; setup " << formatSeconds(setupSeconds) << "\n";
+  if (totalSteps < deckSteps)
+    log << "explicit: stopping after " << totalSteps << " of the deck's " << deckSteps << " steps (--max-steps)\n";
   if (adaptive)
     log << "adaptive PD zone: a CCM element turns PD when its surface strain reaches "
         << deck.zones.adaptive->strainFraction << " x s_c = " << adaptive->threshold() << " (checked every "
@@ -262,18 +269,22 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
     log << "warning: solver.dt is " << solver.timeStep() / solver.criticalTimeStep()
         << " x the estimated critical step; the run is expected to go unstable\n";
 
-  const std::string directory = outputDirectory.empty() ? deck.output.directory : outputDirectory;
-  RunOutput output(model, directory, solver);
+  const std::string directory = runOptions.outputDirectory.empty() ? deck.output.directory : runOptions.outputDirectory;
+  // The run's wall time starts with the first output, so total = setup + run.
+  const auto runStart = Clock::now();
+  auto outputStart = runStart;
+  RunOutput<ExecutionSpaceT> output(model, directory, solver);
   output.writeFields();
   output.appendHistory(solver);
+  double outputSeconds = fencedSecondsSince(space, outputStart), adaptiveSeconds = 0.0;
   io::ProgressReporter progress(totalSteps, log);
-  const auto runStart = std::chrono::steady_clock::now();
   const long long fieldEvery = deck.output.every, historyEvery = deck.output.historyEvery;
   long long switches = 0;
   while (solver.stepIndex() < totalSteps) {
     solver.step();
     const long long step = solver.stepIndex();
     if (adaptive && step % deck.zones.adaptive->checkEvery == 0) {
+      const auto checkStart = Clock::now();
       const LocalIndex switched = coupling::growPdZone(*adaptive, solver);
       if (switched > 0) {
         output.setZoneNodes(adaptive->pdElementNodes());
@@ -282,43 +293,75 @@ ExplicitRunSummary runExplicit(const model::Model& model, const std::string& out
             << " elements turned PD, now " << adaptive->numPdElements() << " PD elements, "
             << solver.body().bonds.numBonds() << " bonds, " << solver.numElements() << " shell elements\n";
       }
+      adaptiveSeconds += fencedSecondsSince(space, checkStart);
     }
     const bool last = step == totalSteps;
+    outputStart = Clock::now();
     if (last || step % historyEvery == 0) output.appendHistory(solver);
     if (last || (fieldEvery > 0 && step % fieldEvery == 0)) output.writeFields();
+    outputSeconds += std::chrono::duration<double>(Clock::now() - outputStart).count();
     progress.update(step, solver.time());
   }
-  Kokkos::fence();
+  space.fence();
   ExplicitRunSummary summary;
   summary.steps = totalSteps;
   summary.timeStep = solver.timeStep();
   summary.criticalTimeStep = solver.criticalTimeStep();
   summary.endTime = solver.time();
-  summary.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - runStart).count();
+  summary.wallSeconds = std::chrono::duration<double>(Clock::now() - runStart).count();
   summary.brokenBonds = solver.brokenBonds();
   summary.xdmfPath = output.xdmfPath();
   summary.historyPath = output.historyPath();
+  // The steps' share: the run less output and zone growth; split by phase when timed.
+  const auto& phase = solver.phaseSeconds();
+  const double stepSeconds = summary.wallSeconds - outputSeconds - adaptiveSeconds;
+  summary.phases = {{"setup", setupSeconds}, {"steps", stepSeconds}};
+  if (runOptions.timePhases)
+    summary.phases.insert(summary.phases.end(), {{"forces", phase.forces},
+                                                 {"integration", phase.integration},
+                                                 {"monitor", phase.monitor}});
+  if (adaptive) summary.phases.emplace_back("adaptive-zone", adaptiveSeconds);
+  summary.phases.emplace_back("output", outputSeconds);
+  summary.phases.emplace_back("total", setupSeconds + summary.wallSeconds);
+  summary.timingsPath = writePhaseTimes(directory, summary.phases);
+
   const auto energy = solver.energies();
   std::ostringstream balance;
   balance.precision(3);
   balance << energy.balanceError();
   io::SummaryTable table("explicit run summary");
-  table.add("steps", std::to_string(totalSteps))
+  table.add("backend", ExecutionSpaceT::name())
+      .add("steps", std::to_string(totalSteps) + (totalSteps < deckSteps ? " of " + std::to_string(deckSteps) : ""))
       .add("time step", formatSeconds(summary.timeStep) + " (critical " + formatSeconds(summary.criticalTimeStep) + ")")
       .add("simulated time", formatSeconds(summary.endTime))
       .add("wall time", io::formatDuration(summary.wallSeconds) + " (" +
-                            formatSeconds(summary.wallSeconds / double(totalSteps)) + " per step)")
+                            formatSeconds(summary.wallSeconds / double(totalSteps)) + " per step)");
+  if (runOptions.timePhases)
+    table.add("  forces", formatSeconds(phase.forces))
+        .add("  integration", formatSeconds(phase.integration))
+        .add("  energy monitor", formatSeconds(phase.monitor));
+  if (adaptive) table.add("  adaptive zone", formatSeconds(adaptiveSeconds));
+  table.add("  output", formatSeconds(outputSeconds))
       .add("setup", formatSeconds(setupSeconds))
       .add("broken bonds", std::to_string(summary.brokenBonds) + " of " + std::to_string(solver.body().bonds.numBonds()))
       .add("energy balance error", balance.str())
       .add("fields", summary.xdmfPath)
-      .add("history", summary.historyPath);
+      .add("history", summary.historyPath)
+      .add("timings", summary.timingsPath);
   if (adaptive)
     table.add("adaptive PD zone", std::to_string(model.numPdElements) + " -> " +
                                       std::to_string(adaptive->numPdElements()) + " PD elements in " +
                                       std::to_string(switches) + " switches");
   table.print(log);
   return summary;
+}
+
+}  // namespace
+
+ExplicitRunSummary runExplicit(const model::Model& model, const RunOptions& options, std::ostream& log) {
+  if constexpr (!std::is_same_v<ExecutionSpace, HostExecutionSpace>)
+    if (options.backend == Backend::Host) return runExplicitOn(HostExecutionSpace{}, model, options, log);
+  return runExplicitOn(ExecutionSpace{}, model, options, log);
 }
 
 }  // namespace perishell::solvers

@@ -1,3 +1,4 @@
+#include <perishell/core/fenced_seconds.hpp>
 #include <perishell/io/csv_history.hpp>
 #include <perishell/io/progress.hpp>
 #include <perishell/io/xdmf_writer.hpp>
@@ -10,6 +11,7 @@
 #include <filesystem>
 #include <ostream>
 #include <sstream>
+#include <type_traits>
 
 namespace perishell::solvers {
 
@@ -24,7 +26,6 @@ void requireImplicitModel(const model::Model& model) {
 
 namespace {
 
-using Solver = StaticNewtonSolver<ExecutionSpace>;
 using HostVector3 = Kokkos::View<double* [3], Kokkos::LayoutRight, Kokkos::HostSpace>;
 
 std::string formatNumber(double value, int precision = 4) {
@@ -34,8 +35,10 @@ std::string formatNumber(double value, int precision = 4) {
   return text.str();
 }
 
+template <class ExecutionSpaceT>
 class ImplicitOutput {
  public:
+  using Solver = StaticNewtonSolver<ExecutionSpaceT>;
   ImplicitOutput(const model::Model& model, const std::string& directory, const Solver& solver)
       : model_(model), solver_(solver), writer_((std::filesystem::create_directories(directory), directory), "results",
                                                 model.shell.mesh) {
@@ -128,9 +131,6 @@ class ImplicitOutput {
   std::optional<io::CsvHistory> history_;
 };
 
-}  // namespace
-
-namespace {
 const char* preconditionerName(deck::Preconditioner preconditioner) {
   switch (preconditioner) {
     case deck::Preconditioner::Jacobi: return "Jacobi";
@@ -139,33 +139,41 @@ const char* preconditionerName(deck::Preconditioner preconditioner) {
   }
   return "?";
 }
-}  // namespace
 
-ImplicitRunSummary runImplicit(const model::Model& model, const std::string& outputDirectory, std::ostream& log) {
+template <class ExecutionSpaceT>
+ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Model& model, const RunOptions& runOptions,
+                                 std::ostream& log) {
+  using Clock = std::chrono::steady_clock;
   const auto& deck = model.deck;
-  const int increments = deck.solver.implicitSettings.increments;
-  const ExecutionSpace space;
-  const auto setupStart = std::chrono::steady_clock::now();
+  const int deckIncrements = deck.solver.implicitSettings.increments;
+  const int increments = static_cast<int>(std::min<long long>(deckIncrements, runOptions.maxSteps.value_or(deckIncrements)));
+  const auto setupStart = Clock::now();
   auto solver = makeStaticSolver(space, model);
-  const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - setupStart).count();
+  const double setupSeconds = fencedSecondsSince(space, setupStart);
   log << "implicit: " << solver.numElements() << " shell elements, " << solver.numBonds() << " bonds on "
-      << ExecutionSpace::name() << "; " << model.freeDofCount() << " free DOF, " << solver.numMatrixEntries()
-      << " tangent entries; " << increments << " increments; setup " << formatNumber(setupSeconds) << " s\n";
+      << ExecutionSpaceT::name() << "; " << model.freeDofCount() << " free DOF, " << solver.numMatrixEntries()
+      << " tangent entries; " << deckIncrements << " increments; setup " << formatNumber(setupSeconds) << " s\n";
+  if (increments < deckIncrements)
+    log << "implicit: stopping after " << increments << " of the deck's " << deckIncrements
+        << " increments (--max-steps)\n";
 
-  const std::string directory = outputDirectory.empty() ? deck.output.directory : outputDirectory;
-  ImplicitOutput output(model, directory, solver);
+  const std::string directory = runOptions.outputDirectory.empty() ? deck.output.directory : runOptions.outputDirectory;
+  // The run's wall time starts with the first output, so total = setup + run.
+  const auto runStart = Clock::now();
+  auto outputStart = runStart;
+  ImplicitOutput<ExecutionSpaceT> output(model, directory, solver);
   output.writeFields();
+  double outputSeconds = fencedSecondsSince(space, outputStart);
   io::ProgressReporter progress(increments, log);
   ImplicitRunSummary summary;
-  const auto runStart = std::chrono::steady_clock::now();
   PhaseSeconds phases;
   for (int increment = 1; increment <= increments; ++increment) {
     IncrementReport report;
     try {
-      report = solver.advanceTo(double(increment) / increments);
+      report = solver.advanceTo(double(increment) / deckIncrements);
     } catch (const NewtonFailure& failure) {
       output.writeFields();
-      throw NewtonFailure("increment " + std::to_string(increment) + " of " + std::to_string(increments) + ": " +
+      throw NewtonFailure("increment " + std::to_string(increment) + " of " + std::to_string(deckIncrements) + ": " +
                           failure.what() + "; the last converged state (load factor " +
                           formatNumber(solver.loadFactor()) + ") is in " + output.xdmfPath());
     }
@@ -180,17 +188,32 @@ ImplicitRunSummary runImplicit(const model::Model& model, const std::string& out
     summary.linearIterations += report.linearIterations;
     summary.preconditionerBuilds += report.preconditionerBuilds;
     const bool last = increment == increments;
+    outputStart = Clock::now();
     if (last || increment % deck.output.historyEvery == 0)
       summary.maxDisplacement = output.appendHistory(increment, report);
     if (last || (deck.output.every > 0 && increment % deck.output.every == 0)) output.writeFields();
+    outputSeconds += std::chrono::duration<double>(Clock::now() - outputStart).count();
     progress.update(increment, solver.loadFactor());
   }
   summary.increments = increments;
-  summary.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - runStart).count();
+  summary.wallSeconds = std::chrono::duration<double>(Clock::now() - runStart).count();
   summary.xdmfPath = output.xdmfPath();
   summary.historyPath = output.historyPath();
+  summary.phases = {{"setup", setupSeconds},
+                    {"internal-forces", phases.residual},
+                    {"assembly", phases.assembly},
+                    {"constraints", phases.constraints},
+                    {"preconditioner", phases.preconditioner},
+                    {"linear-solve", phases.linearSolve},
+                    {"update", phases.update},
+                    {"output", outputSeconds},
+                    {"total", setupSeconds + summary.wallSeconds}};
+  summary.timingsPath = writePhaseTimes(directory, summary.phases);
   io::SummaryTable("implicit run summary")
-      .add("increments", std::to_string(increments) + " (" + std::to_string(summary.cuts) + " cuts)")
+      .add("backend", ExecutionSpaceT::name())
+      .add("increments", std::to_string(increments) +
+                             (increments < deckIncrements ? " of " + std::to_string(deckIncrements) : std::string()) +
+                             " (" + std::to_string(summary.cuts) + " cuts)")
       .add("Newton iterations", std::to_string(summary.newtonIterations))
       .add("linear iterations", std::to_string(summary.linearIterations) + " (" +
                                     preconditionerName(deck.solver.implicitSettings.preconditioner) + " PCG)")
@@ -205,11 +228,21 @@ ImplicitRunSummary runImplicit(const model::Model& model, const std::string& out
                                         : std::string()))
       .add("  linear solve", formatNumber(phases.linearSolve) + " s")
       .add("  update", formatNumber(phases.update) + " s")
+      .add("  output", formatNumber(outputSeconds) + " s")
       .add("setup", formatNumber(setupSeconds) + " s")
       .add("fields", summary.xdmfPath)
       .add("history", summary.historyPath)
+      .add("timings", summary.timingsPath)
       .print(log);
   return summary;
+}
+
+}  // namespace
+
+ImplicitRunSummary runImplicit(const model::Model& model, const RunOptions& options, std::ostream& log) {
+  if constexpr (!std::is_same_v<ExecutionSpace, HostExecutionSpace>)
+    if (options.backend == Backend::Host) return runImplicitOn(HostExecutionSpace{}, model, options, log);
+  return runImplicitOn(ExecutionSpace{}, model, options, log);
 }
 
 }  // namespace perishell::solvers

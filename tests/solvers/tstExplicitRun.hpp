@@ -7,8 +7,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace perishell_test_explicit_run {
@@ -18,6 +20,13 @@ std::vector<std::string> splitCsv(const std::string& line) {
   std::stringstream stream(line);
   for (std::string cell; std::getline(stream, cell, ',');) cells.push_back(cell);
   return cells;
+}
+
+// The run driver's backend that runs on ExecutionSpaceT.
+template <class ExecutionSpaceT>
+perishell::solvers::Backend backendOf() {
+  return std::is_same_v<ExecutionSpaceT, perishell::ExecutionSpace> ? perishell::solvers::Backend::Device
+                                                                     : perishell::solvers::Backend::Host;
 }
 
 }  // namespace perishell_test_explicit_run
@@ -47,7 +56,7 @@ TEST(TEST_CATEGORY, explicit_run_settles_to_the_static_reaction_and_writes_its_h
 )";
   const auto model = perishell::model::buildModel(perishell::parseDeck(text, "strip.yaml"));
   std::ostringstream log;
-  const auto summary = perishell::solvers::runExplicit(model, directory, log);
+  const auto summary = perishell::solvers::runExplicit(model, {directory, backendOf<TEST_EXECSPACE>()}, log);
   EXPECT_EQ(summary.steps, 3000);
   EXPECT_EQ(summary.brokenBonds, 0);
   EXPECT_NE(log.str().find("explicit run summary"), std::string::npos) << log.str();
@@ -76,5 +85,21 @@ TEST(TEST_CATEGORY, explicit_run_settles_to_the_static_reaction_and_writes_its_h
   EXPECT_GT(std::stod(last[6]), 0.0);
   EXPECT_EQ(std::stod(last[13]), 0.0);
   EXPECT_EQ(std::stod(last[17]), 0.0);  // no damaged node, no crack
+
+  // timings.csv: the phases of the summary, the steps and the output within the total.
+  std::ifstream timings(summary.timingsPath);
+  ASSERT_TRUE(std::getline(timings, line));
+  EXPECT_EQ(line, "phase,seconds");
+  std::map<std::string, double> seconds;
+  while (std::getline(timings, line)) {
+    const auto fields = splitCsv(line);
+    ASSERT_EQ(fields.size(), 2u) << line;
+    seconds[fields[0]] = std::stod(fields[1]);
+  }
+  ASSERT_EQ(seconds.size(), summary.phases.size());
+  for (const char* phase : {"setup", "steps", "output", "total"}) EXPECT_EQ(seconds.count(phase), 1u) << phase;
+  EXPECT_EQ(seconds.count("forces"), 0u);  // phases of a step only with RunOptions::timePhases
+  EXPECT_GT(seconds["steps"], 0.0);
+  EXPECT_LE(seconds["setup"] + seconds["steps"] + seconds["output"], seconds["total"] * (1 + 1e-9));
   std::filesystem::remove_all(directory);
 }

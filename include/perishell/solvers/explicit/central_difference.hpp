@@ -12,6 +12,7 @@
 // must hold (to the scheme's O(dt^2)). A time step above the stability limit makes the
 // highest mode grow by a factor of several per step; its energy then far exceeds the work
 // done on the body, and the run stops with ExplicitInstability instead of producing garbage.
+#include <perishell/core/fenced_seconds.hpp>
 #include <perishell/fracture/carry_broken_bonds.hpp>
 #include <perishell/fracture/damage.hpp>
 #include <perishell/pd/bond_forces.hpp>
@@ -20,6 +21,7 @@
 #include <perishell/shell/shell_body.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <optional>
 #include <sstream>
@@ -44,6 +46,16 @@ struct ExplicitOptions {
   // Unstable when kinetic + strain + dissipated energy exceeds (1 + this) times the energy
   // put in; a stable run stays within a few per cent.
   double energyGrowthLimit = 1.0;
+  // Fence after each phase of a step and add its wall time to phaseSeconds() (the paper's
+  // Table 3 columns). Costs a synchronisation per phase, so it is off for plain runs.
+  bool timePhases = false;
+};
+
+// Wall time of the phases of the steps taken so far [s], with ExplicitOptions::timePhases.
+struct ExplicitPhaseSeconds {
+  double forces = 0.0;       // bond and element forces (stress update)
+  double integration = 0.0;  // the leapfrog update of every node, supports and loads
+  double monitor = 0.0;      // the energy balance check every monitorEvery steps
 };
 
 // Energies at one step [J]; the balance error is
@@ -109,10 +121,16 @@ class CentralDifferenceSolver {
   // balance and throws ExplicitInstability on non-finite or runaway energy.
   void step() {
     const bool monitor = step_ % options_.monitorEvery == 0;
+    auto phaseStart = std::chrono::steady_clock::now();
     computeForces(monitor);
+    timePhase(phaseSeconds_.forces, phaseStart);
     std::swap(intact_, intactNext_);
     advance(monitor);
-    if (monitor) checkEnergy();
+    timePhase(phaseSeconds_.integration, phaseStart);
+    if (monitor) {
+      checkEnergy();
+      timePhase(phaseSeconds_.monitor, phaseStart);
+    }
     ++step_;
     time_ += timeStep_;
   }
@@ -167,6 +185,7 @@ class CentralDifferenceSolver {
   double timeStep() const { return timeStep_; }
   double criticalTimeStep() const { return criticalTimeStep_; }
   const EnergyReport& lastEnergyReport() const { return lastReport_; }
+  const ExplicitPhaseSeconds& phaseSeconds() const { return phaseSeconds_; }
   const pd::PdBody<MemorySpace>& body() const { return body_; }
   LocalIndex numElements() const { return shell_ ? shell_->numElements() : 0; }
   const pd::PdKinematics<MemorySpace>& kinematics() const { return state_; }
@@ -503,6 +522,13 @@ class CentralDifferenceSolver {
   }
 
  private:
+  // With timePhases: fences, adds the time since `start` to `total` and restarts `start`.
+  void timePhase(double& total, std::chrono::steady_clock::time_point& start) const {
+    if (!options_.timePhases) return;
+    total += fencedSecondsSince(space_, start);
+    start = std::chrono::steady_clock::now();
+  }
+
   ExecutionSpaceT space_;
   pd::PdBody<MemorySpace> body_;
   std::optional<shell::ShellBody<MemorySpace>> shell_;
@@ -524,6 +550,7 @@ class CentralDifferenceSolver {
   double initialEnergy_ = 0.0;
   bool nonFinite_ = false;
   EnergyReport lastReport_;
+  ExplicitPhaseSeconds phaseSeconds_;
 };
 
 }  // namespace perishell::solvers

@@ -1,9 +1,11 @@
 #pragma once
 // `perishell run` for an explicit deck: model -> PD body and loads on the device ->
 // central-difference steps with progress -> XDMF fields every output.every steps and a CSV
-// history every output.history-every steps -> a summary table. Runs on the build's default
-// execution space; only output steps copy data to the host.
+// history every output.history-every steps -> DIR/timings.csv and a summary table. Runs on
+// the build's default execution space or its host space (RunOptions::backend); only output
+// steps copy data to the host.
 #include <perishell/model/model.hpp>
+#include <perishell/solvers/run_options.hpp>
 
 #include <iosfwd>
 #include <string>
@@ -16,12 +18,13 @@ struct ExplicitRunSummary {
   double endTime = 0.0;                           // [s]
   double wallSeconds = 0.0;
   long long brokenBonds = 0;
-  std::string xdmfPath, historyPath;
+  PhaseTimes phases;  // as written to timingsPath
+  std::string xdmfPath, historyPath, timingsPath;
 };
 
 // Throws std::invalid_argument (naming the deck key) for models the explicit solver cannot
 // run yet, ExplicitInstability when the run goes unstable (files written up to then stay
 // valid), std::runtime_error for output failures.
-ExplicitRunSummary runExplicit(const model::Model& model, const std::string& outputDirectory, std::ostream& log);
+ExplicitRunSummary runExplicit(const model::Model& model, const RunOptions& options, std::ostream& log);
 
 }  // namespace perishell::solvers

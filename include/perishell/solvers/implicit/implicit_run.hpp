@@ -2,8 +2,10 @@
 // `perishell run` for an implicit deck: model -> shell elements or PD bonds, loads and
 // supports on the device -> Newton load increments (solvers/implicit/static_newton.hpp) with
 // progress -> XDMF fields every output.every increments, a CSV history row per increment ->
-// a summary table. Only converged increments copy data to the host.
+// DIR/timings.csv and a summary table, on the build's default execution space or its host
+// space (RunOptions::backend). Only converged increments copy data to the host.
 #include <perishell/model/model.hpp>
+#include <perishell/solvers/run_options.hpp>
 
 #include <iosfwd>
 #include <string>
@@ -17,11 +19,12 @@ struct ImplicitRunSummary {
   long long preconditionerBuilds = 0;
   double wallSeconds = 0.0;
   double maxDisplacement = 0.0;  // largest |u| of a node at the end [m]
-  std::string xdmfPath, historyPath;
+  PhaseTimes phases;  // as written to timingsPath
+  std::string xdmfPath, historyPath, timingsPath;
 };
 
 // Throws NewtonFailure (after writing the last converged state) when an increment cannot be
 // converged within its cuts.
-ImplicitRunSummary runImplicit(const model::Model& model, const std::string& outputDirectory, std::ostream& log);
+ImplicitRunSummary runImplicit(const model::Model& model, const RunOptions& options, std::ostream& log);
 
 }  // namespace perishell::solvers

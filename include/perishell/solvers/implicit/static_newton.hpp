@@ -9,6 +9,7 @@
 // An increment that does not converge is restored and bisected, a bounded number of times.
 // The state lives on the device; callers copy it to the host only for output.
 #include <perishell/assembly/dirichlet.hpp>
+#include <perishell/core/fenced_seconds.hpp>
 #include <perishell/assembly/nodal_block_crs.hpp>
 #include <perishell/pd/bond_tangent.hpp>
 #include <perishell/shell/shell_body.hpp>
@@ -102,13 +103,6 @@ inline std::string scientific(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.3e", value);
   return text;
-}
-
-// Seconds since start, after the space's work is done.
-template <class ExecutionSpaceT>
-double secondsSince(const ExecutionSpaceT& space, std::chrono::steady_clock::time_point start) {
-  space.fence();
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 }  // namespace detail
 
@@ -207,7 +201,7 @@ class StaticNewtonSolver {
     for (int iteration = 0;; ++iteration) {
       auto start = Clock::now();
       const auto norms = computeOutOfBalance(target);
-      report.seconds.residual += detail::secondsSince(space_, start);
+      report.seconds.residual += fencedSecondsSince(space_, start);
       if (!std::isfinite(norms.free) || !std::isfinite(norms.reference))
         return "the out-of-balance force is not finite at iteration " + std::to_string(iteration);
       const double reference = std::max(norms.reference, 1e-300);
@@ -228,7 +222,7 @@ class StaticNewtonSolver {
         return "diverging (residual grew " + detail::scientific(norms.free / initialResidual) + " x)";
       start = Clock::now();
       assembleTangent();
-      report.seconds.assembly += detail::secondsSince(space_, start);
+      report.seconds.assembly += fencedSecondsSince(space_, start);
       belos::CgOptions linear;
       linear.method = options_.tangent == TangentForm::Exact ? belos::CgOptions::Method::Gmres : belos::CgOptions::Method::Cg;
       linear.preconditioner = options_.preconditioner;
@@ -241,7 +235,7 @@ class StaticNewtonSolver {
       const VectorView<Memory> rhs = flatOutOfBalance();
       start = Clock::now();
       assembly::eliminateDirichlet(space_, pattern_.rowMap, pattern_.columns, values_, rhs, isConstrained_, zerosConst());
-      report.seconds.constraints += detail::secondsSince(space_, start);
+      report.seconds.constraints += fencedSecondsSince(space_, start);
       const auto numRows = static_cast<LocalIndex>(rhs.extent(0));
       const Matrix K("perishell::newton::tangent", numRows, numRows, static_cast<RowOffset>(values_.extent(0)), values_,
                      pattern_.rowMap, pattern_.columns);
@@ -266,7 +260,7 @@ class StaticNewtonSolver {
       start = Clock::now();
       applyCorrection();
       lastCorrection = largestTranslation(false);
-      report.seconds.update += detail::secondsSince(space_, start);
+      report.seconds.update += fencedSecondsSince(space_, start);
     }
   }
 
@@ -378,11 +372,11 @@ class StaticNewtonSolver {
       }
       preconditioner = Teuchos::rcp<const Belos::Operator<double>>(multigrid_.get(), false);
     }
-    report.seconds.preconditioner += detail::secondsSince(space_, start);
+    report.seconds.preconditioner += fencedSecondsSince(space_, start);
     Kokkos::deep_copy(space_, solution, 0.0);
     start = Clock::now();
     const belos::CgResult result = belos::solveCg<ExecutionSpaceT>(K, rhs, solution, limited, preconditioner);
-    report.seconds.linearSolve += detail::secondsSince(space_, start);
+    report.seconds.linearSolve += fencedSecondsSince(space_, start);
     report.linearIterations += result.iterations;
     if (amg) {
       if (rebuild) iterationsAfterRebuild_ = result.iterations;

@@ -1,0 +1,175 @@
+#!/usr/bin/env python3
+"""Writes docs/results.md (and docs/images/results/) from what perf/results.sh measured.
+
+  python3 perf/results_report.py OUT [--docs DOCS]
+
+OUT holds the parts of perf/results.sh (speedup/, accuracy/, examples/, each with its
+machine.txt); a part that is missing is reported as not measured. Stdlib only.
+"""
+import argparse
+import csv
+import math
+import os
+import re
+import shutil
+import sys
+
+# The paper's GPU times of its explicit examples (model.md §7; Tables 5, 7, 8) [s].
+PAPER_GPU = {"steel_plate_4_2_2": 10619, "hexagonal_prism_4_2_3": 4492, "cracked_cylinder_4_2_4": 4257}
+EXAMPLES = [
+    ("glass_plate_4_1_2", "4.1.2 glass plate, crack branching"),
+    ("steel_plate_4_2_2", "4.2.2 mild-steel plate under lateral load"),
+    ("hexagonal_prism_4_2_3", "4.2.3 hexagonal prism under pressure"),
+    ("cracked_cylinder_4_2_4", "4.2.4 pre-cracked cylinder under lateral load"),
+]
+REGENERATE = "bash perf/results.sh build/cuda OUT && python3 perf/results_report.py OUT"
+
+
+class ReportError(Exception):
+    pass
+
+
+def machine(part_dir):
+    path = os.path.join(part_dir, "machine.txt")
+    if not os.path.exists(path):
+        return "machine not recorded"
+    facts = dict(line.split(": ", 1) for line in open(path, encoding="utf-8").read().splitlines() if ": " in line)
+    gpu = facts.get("gpu") or "no GPU"
+    return f"{facts.get('date', '?')}; GPU: {gpu}; CPU: {facts.get('cpu', '?')}"
+
+
+class Images:
+    """Copies figures next to the report and returns their relative links."""
+
+    def __init__(self, docs):
+        self.directory = os.path.join(docs, "images", "results")
+        os.makedirs(self.directory, exist_ok=True)
+
+    def link(self, source, name):
+        if not os.path.exists(source):
+            return None
+        shutil.copyfile(source, os.path.join(self.directory, name))
+        return f"images/results/{name}"
+
+
+def speedup_section(out, images):
+    part = os.path.join(out, "speedup")
+    md = os.path.join(part, "speedup.md")
+    if not os.path.exists(md):
+        return ["## CPU vs GPU", "", "Not measured (`perf/results.sh BUILD OUT speedup`).", ""]
+    text = open(md, encoding="utf-8").read().splitlines()
+    body = [line.replace("## ", "### ", 1) if line.startswith("## ") else line for line in text[1:]]
+    lines = ["## CPU vs GPU (`perf/speedup.py`)", "", f"Measured {machine(part)}."] + body
+    chart = images.link(os.path.join(part, "speedup.png"), "speedup.png")
+    if chart:
+        lines += ["", f"![speedup against DOF, ours and the paper's]({chart})", ""]
+    return lines
+
+
+def accuracy_section(out, images):
+    part = os.path.join(out, "accuracy")
+    path = os.path.join(part, "accuracy.csv")
+    if not os.path.exists(path):
+        return ["## Speed against accuracy", "", "Not measured (`perf/results.sh BUILD OUT accuracy`).", ""]
+    rows = list(csv.DictReader(open(path, encoding="utf-8")))
+    lines = ["## Speed against accuracy (`perf/accuracy_cost.cpp`, `perf/charts/speed_accuracy.py`)", "",
+             f"Measured {machine(part)}. Error against the references of model.md §8, wall time from model build "
+             "to answer. Per case: every run, then its chart (log–log error against wall time, one curve per "
+             "backend and swept parameter).", ""]
+    for case in dict.fromkeys(row["case"] for row in rows):
+        case_rows = [row for row in rows if row["case"] == case]
+        lines += [f"### {case}: reference {case_rows[0]['reference']}", "",
+                  "| backend | model | Δx [m] | m | PD ratio | kernel | free DOF | wall [s] | error | status |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
+        for row in case_rows:
+            error = row["error"]
+            try:
+                error = f"{float(error):.3g}" if math.isfinite(float(error)) else error
+            except ValueError:
+                pass
+            lines.append(f"| {row['backend']} | {row['model']} | {row['spacing_m']} | {row['horizon_factor']} | "
+                         f"{row['pd_ratio']} | {row['force_kernel']} | {row['free_dof']} | "
+                         f"{float(row['wall_seconds']):.3g} | {error} | {row['status']} |")
+        chart = images.link(os.path.join(part, f"accuracy_{case}.png"), f"accuracy_{case}.png")
+        if chart:
+            lines += ["", f"![{case}: error against wall time]({chart})"]
+        lines.append("")
+    return lines
+
+
+def summary_value(log, name):
+    found = re.search(rf"^\s*{re.escape(name)}\s{{2,}}(.+)$", log, flags=re.M)
+    return found[1].strip() if found else "?"
+
+
+def examples_section(out, images):
+    part = os.path.join(out, "examples")
+    if not os.path.isdir(part):
+        return ["## The paper's explicit examples", "", "Not measured (`perf/results.sh BUILD OUT examples`).", ""]
+    lines = ["## The paper's explicit examples, run to the end", "", f"Measured {machine(part)}, on the device "
+             "backend. Damage images: `perf/charts/render_results.py damage`, three output steps each.", "",
+             "| example | nodes | steps | wall time | per step | broken bonds | the paper's GPU |",
+             "|---|---|---|---|---|---|---|"]
+    figures = []
+    for deck, title in EXAMPLES:
+        log_path = os.path.join(part, f"{deck}.log")
+        if not os.path.exists(log_path):
+            lines.append(f"| {title} | not run | | | | | |")
+            continue
+        log = open(log_path, encoding="utf-8").read()
+        nodes = re.search(r"model\s+([0-9,]+) nodes", log)
+        wall = summary_value(log, "wall time")
+        per_step = re.search(r"\(([0-9.e+-]+ s) per step\)", wall)
+        paper = PAPER_GPU.get(deck)
+        lines.append(f"| {title} | {nodes[1] if nodes else '?'} | {summary_value(log, 'steps')} | "
+                     f"{wall.split(' (')[0]} | {per_step[1] if per_step else '?'} | "
+                     f"{summary_value(log, 'broken bonds')} | {f'{paper:,} s' if paper else '–'} |")
+        panel = images.link(os.path.join(part, deck, f"{deck}_damage_panel.png"), f"{deck}_damage.png")
+        if panel:
+            figures.append(f"**{title}**: damage\n\n![{title}: damage]({panel})\n")
+    lines += [""] + figures
+    speed = images.link(os.path.join(part, "glass_plate_4_1_2", "tip_speed.png"), "glass_tip_speed.png")
+    if speed:
+        history = os.path.join(part, "glass_plate_4_1_2", "history.csv")
+        top = max((float(r["crack-tip-speed [m/s]"]) for r in csv.DictReader(open(history, encoding="utf-8"))
+                   if r.get("crack-tip-speed [m/s]") not in (None, "", "nan")), default=float("nan"))
+        lines += [f"Glass plate crack tip speed (largest between history rows: {top:.0f} m/s; Rayleigh speed "
+                  f"about 3058 m/s, model.md §8):", "", f"![glass crack tip speed]({speed})", ""]
+    opening = images.link(os.path.join(part, "steel_plate_4_2_2", "load_opening.png"), "steel_load_opening.png")
+    if opening:
+        lines += ["Steel plate load against crack opening:", "", f"![steel load opening]({opening})", ""]
+    return lines
+
+
+def main(arguments):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("out", help="the OUT directory of perf/results.sh")
+    parser.add_argument("--docs", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "docs"))
+    options = parser.parse_args(arguments)
+    if not os.path.isdir(options.out):
+        raise ReportError(f"{options.out}: no such directory")
+    images = Images(options.docs)
+    lines = ["# Results: speed and accuracy against the paper", "",
+             "Everything below is regenerated by one command on a CUDA build (a CUDA build measures both "
+             "backends; `--backend host` on 2 OpenMP threads is the CPU baseline):", "", "```sh",
+             REGENERATE, "```", "",
+             "Each part (`speedup`, `accuracy`, `examples`) can be run on its own (`perf/results.sh BUILD OUT PART`) "
+             "and the report rebuilt from what is there. The paper's numbers are its own GPU and CPU (model.md §7).",
+             ""]
+    lines += speedup_section(options.out, images)
+    lines += accuracy_section(options.out, images)
+    lines += examples_section(options.out, images)
+    path = os.path.join(options.docs, "results.md")
+    with open(path + ".tmp", "w", encoding="utf-8") as stream:
+        stream.write("\n".join(lines).rstrip() + "\n")
+    os.replace(path + ".tmp", path)
+    print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main(sys.argv[1:]))
+    except (ReportError, OSError, KeyError) as error:
+        print(f"results_report: error: {error}", file=sys.stderr)
+        sys.exit(1)

@@ -1,0 +1,397 @@
+#!/usr/bin/env python3
+"""CPU-vs-GPU speedup of the paper's examples (Tables 3-5, 7, 8), from one perishell binary.
+
+Runs each case deck of apps/cases at each grid spacing with `perishell run --backend host`
+(Kokkos' host space, OpenMP on --cpu-threads threads: the CPU baseline) and with
+`--backend device` (CUDA in a CUDA build), reads the per-phase wall times each run writes
+to timings.csv, and writes:
+
+  OUT/speedup.csv   one row per case, grid, backend and phase: the median over repeats
+  OUT/speedup.md    per case: time per step (or per linear solve) on each backend and their
+                    ratio, the full run's time (measured, or extrapolated from the steps
+                    run), and the paper's GPU and CPU times for the same case and grid;
+                    per case a phase table in the style of the paper's Table 3
+  OUT/speedup.png   speedup against the paper's DOF count, ours beside the paper's (if
+                    matplotlib is there)
+
+Explicit cases run --cpu-steps steps on the CPU and --gpu-steps on the GPU (0: the whole
+deck); implicit ones one increment on both. Time per step is the `steps` phase over the
+steps run; the full run is extrapolated as setup + per step x the deck's steps when fewer
+were run. Both DOF counts are reported: the paper's (elements x 24, model.md §7) and the true
+free DOF. Stdlib only, so it runs on the GPU machine as it is.
+
+  python3 perf/speedup.py --app build/cuda/apps/perishell --out speedup [--cases steel,prism]
+      [--repeats 3] [--cpu-threads 2] [--cpu-steps 200] [--gpu-steps 0] [--quick]
+"""
+import argparse
+import csv
+import math
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+CASES_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "apps", "cases")
+
+# The paper's tables (model.md §7; Table 8's last CPU entry reads "14,178" in the paper's
+# text, a dropped digit: its speedup 9.72 x 14,586 s gives 141,776 s).
+CASES = {
+    "pressed": {
+        "deck": "pressed_plate_4_2_1.yaml", "kind": "implicit",
+        "title": "4.2.1 pressed plate, 50 % PD: one linear solve (paper Table 4)",
+        "grids": [  # spacing [m], paper DOF, paper GPU s, paper CPU s, run on the CPU
+            (0.5e-3, 259200, 163, 1229, True),
+            (0.25e-3, 1036800, 347, 3148, True),
+            (0.1e-3, 6480000, 11329, 115293, False),
+        ],
+        "phase_paper": {  # Table 3: one iteration step at 0.5 mm, CPU and GPU [s]
+            "assembly": (11.16, 4.23), "constraints": (0.03, 0.01),
+            "linear solve": (1228.65, 163.82), "stress update": (0.74, 0.16)},
+    },
+    "steel": {
+        "deck": "steel_plate_4_2_2.yaml", "kind": "explicit",
+        "title": "4.2.2 mild-steel plate, 100 % PD, 50,000 steps (paper Table 5)",
+        # 1.015 and 0.7 mm keep the crack line x = 101.5 mm on a node column (the paper's
+        # finer grids: 989,016 and 1,759,920 DOF, about 1.0 and 0.75 mm).
+        "grids": [(1.75e-3, 322944, 10619, 74645, True), (1.015e-3, 989016, 45743, 359189, True),
+                  (0.7e-3, 1759920, 60452, 497297, True)],
+    },
+    "prism": {
+        "deck": "hexagonal_prism_4_2_3.yaml", "kind": "explicit",
+        "title": "4.2.3 hexagonal prism, 100 % PD (paper Table 7)",
+        "grids": [(2.5e-3, 456760, 4492, 33102, True), (1.5e-3, 1256976, 9073, 78329, True),
+                  (1.0e-3, 2854800, 18276, 173787, True)],
+    },
+    "cylinder": {
+        "deck": "cracked_cylinder_4_2_4.yaml", "kind": "explicit",
+        "title": "4.2.4 pre-cracked cylinder, 100 % PD (paper Table 8)",
+        "grids": [(4.5e-3, 446904, 4257, 33274, True), (3.0e-3, 1005528, 8447, 72391, True),
+                  (2.0e-3, 2262456, 14586, 141776, True)],
+    },
+    "glass": {
+        "deck": "glass_plate_4_1_2.yaml", "kind": "explicit",
+        "title": "4.1.2 glass plate, 100 % PD (no paper timing)",
+        "grids": [(0.5e-3, None, None, None, True)],
+    },
+}
+
+
+class SpeedupError(Exception):
+    pass
+
+
+def deck_at_spacing(deck_path, spacing, directory):
+    """The deck with mesh.spacing replaced (the first `spacing:` key), written to directory."""
+    with open(deck_path, encoding="utf-8") as stream:
+        text = stream.read()
+    new_text, count = re.subn(r"^(\s+spacing:\s*)[-+0-9.eE]+", lambda m: f"{m.group(1)}{spacing!r}", text,
+                              count=1, flags=re.M)
+    if count != 1:
+        raise SpeedupError(f"{deck_path}: no 'spacing:' key to set")
+    path = os.path.join(directory, f"{os.path.basename(deck_path)[:-5]}_{spacing * 1e3:g}mm.yaml")
+    with open(path, "w", encoding="utf-8") as stream:
+        stream.write(new_text)
+    return path
+
+
+def run_once(app, deck, backend, steps, threads, output, phase_times=False):
+    """One `perishell run`; returns (phases {name: seconds}, facts parsed from the log)."""
+    command = [app, "run", deck, "--backend", backend, "--output", output]
+    if steps:
+        command += ["--max-steps", str(steps)]
+    if phase_times:
+        command.append("--phase-times")
+    environment = dict(os.environ, OMP_NUM_THREADS=str(threads), OMP_PROC_BIND="false")
+    started = time.time()
+    result = subprocess.run(command, capture_output=True, text=True, env=environment)
+    if result.returncode != 0:
+        raise SpeedupError(f"{' '.join(command)} exited {result.returncode}:\n{result.stdout[-2000:]}"
+                           f"{result.stderr[-2000:]}")
+    log = result.stdout
+    phases = {}
+    with open(os.path.join(output, "timings.csv"), encoding="utf-8") as stream:
+        for row in csv.DictReader(stream):
+            phases[row["phase"]] = float(row["seconds"])
+    facts = {"process_seconds": time.time() - started}
+    model = re.search(r"model\s+([0-9,]+) nodes, ([0-9,]+) quads, PD ratio ([0-9.]+) %, ([0-9,]+) free DOF", log)
+    if not model:
+        raise SpeedupError(f"{' '.join(command)}: no model line in its output")
+    facts["nodes"], facts["elements"] = int(model[1].replace(",", "")), int(model[2].replace(",", ""))
+    facts["free_dof"] = int(model[4].replace(",", ""))
+    counted = re.search(r"\b(steps|increments)\s+([0-9]+)(?: of ([0-9]+))?", log.split("run summary", 1)[-1])
+    facts["steps"] = int(counted[2])
+    facts["deck_steps"] = int(counted[3] or counted[2])
+    newton = re.search(r"Newton iterations\s+([0-9]+)", log)
+    facts["newton"] = int(newton[1]) if newton else None
+    backend_name = re.search(r"backend\s+(\S+)", log.split("run summary", 1)[-1])
+    facts["backend_name"] = backend_name[1] if backend_name else backend
+    return phases, facts
+
+
+def measure(app, case, spacing, backend, steps, threads, repeats, work, split_steps):
+    """Median phases over repeats; with split_steps, one more run with --phase-times adds the
+    explicit step's phases (kept out of the repeats: its synchronisations slow the steps)."""
+    deck = deck_at_spacing(os.path.join(CASES_DIR, CASES[case]["deck"]), spacing, work)
+    runs = []
+    for repeat in range(repeats + (1 if split_steps else 0)):
+        timed = repeat == repeats
+        output = os.path.join(work, f"{case}-{spacing:g}-{backend}-{repeat}")
+        runs.append(run_once(app, deck, backend, steps, threads, output, phase_times=timed))
+        shutil.rmtree(output, ignore_errors=True)
+        print(f"speedup: {case} {spacing * 1e3:g} mm {backend} run {repeat + 1}{' (phase times)' if timed else ''}: "
+              f"{runs[-1][0]['total']:.3f} s", file=sys.stderr, flush=True)
+    phases = {name: statistics.median(run[0][name] for run in runs[:repeats]) for name in runs[0][0]}
+    if split_steps:
+        for name in ("forces", "integration", "monitor"):
+            if name in runs[-1][0]:
+                phases[name] = runs[-1][0][name]
+    return phases, runs[0][1]
+
+
+def per_step(kind, phases, facts):
+    """Seconds per step (explicit) or per linear solve (implicit: preconditioner + PCG per
+    Newton iteration, the paper's Table 4 measure)."""
+    if kind == "implicit":
+        return (phases["preconditioner"] + phases["linear-solve"]) / max(1, facts["newton"])
+    return phases["steps"] / facts["steps"]
+
+
+def full_run(kind, phases, facts):
+    """(seconds, extrapolated?) for the deck's whole run."""
+    if facts["steps"] == facts["deck_steps"]:
+        return phases["total"], False
+    if kind == "implicit":  # every increment as the first
+        run = phases["total"] - phases["setup"]
+        return phases["setup"] + run * facts["deck_steps"] / facts["steps"], True
+    return phases["setup"] + per_step(kind, phases, facts) * facts["deck_steps"], True
+
+
+def seconds_text(value, extrapolated=False):
+    if value is None:
+        return "–"
+    text = f"{value:.3g}" if value < 100 else f"{value:,.0f}"
+    return text + (" (extrap.)" if extrapolated else "")
+
+
+def ratio_text(numerator, denominator):
+    if numerator is None or denominator is None or denominator <= 0:
+        return "–"
+    return f"{numerator / denominator:.1f}×"
+
+
+def phase_rows(kind, cpu, gpu):
+    if kind == "implicit":
+        names = [("setup (neighbour search, bonds, pattern)", "setup"), ("assembly", "assembly"),
+                 ("constraints", "constraints"), ("linear solve (PCG)", "linear-solve"),
+                 ("preconditioner (AMG set-up)", "preconditioner"), ("stress update (internal forces)",
+                                                                      "internal-forces"),
+                 ("update (u, R)", "update"), ("output", "output"), ("total", "total")]
+    else:
+        names = [("setup (neighbour search, bonds)", "setup"), ("stress update (forces)", "forces"),
+                 ("integration", "integration"), ("energy monitor", "monitor"), ("all steps", "steps"),
+                 ("output", "output"),
+                 ("total", "total")]
+    rows = []
+    for label, key in names:
+        c = cpu[0].get(key) if cpu else None
+        g = gpu[0].get(key) if gpu else None
+        if c is None and g is None:
+            continue
+        rows.append((label, c, g))
+    return rows
+
+
+def write_outputs(out, results, options, machine):
+    csv_path = os.path.join(out, "speedup.csv")
+    with open(csv_path + ".tmp", "w", newline="", encoding="utf-8") as stream:
+        writer = csv.writer(stream)
+        writer.writerow(["case", "spacing_m", "paper_dof", "free_dof", "nodes", "backend", "threads", "steps",
+                         "deck_steps", "newton_iterations", "repeats", "phase", "seconds"])
+        for (case, spacing), entry in results.items():
+            for backend in ("host", "device"):
+                measured = entry.get(backend)
+                if not measured:
+                    continue
+                phases, facts = measured
+                for phase, seconds in phases.items():
+                    writer.writerow([case, spacing, entry["paper_dof"] or "", facts["free_dof"], facts["nodes"],
+                                     facts["backend_name"], options.cpu_threads, facts["steps"],
+                                     facts["deck_steps"], facts["newton"] or "", options.repeats, phase,
+                                     f"{seconds:.9g}"])
+    os.replace(csv_path + ".tmp", csv_path)
+
+    lines = [f"# CPU vs GPU: the paper's examples", "",
+             f"{machine}. Command: `{' '.join(sys.argv)}`; {time.strftime('%Y-%m-%d')}. "
+             f"CPU = `--backend host` on {options.cpu_threads} OpenMP threads, GPU = `--backend device`; "
+             f"medians of {options.repeats} runs. DOF: the paper's count (elements × 24) and ours (free DOF). "
+             "Per step: the explicit steps' time over the steps run; implicit: preconditioner + PCG per "
+             "Newton iteration of the first increment (the paper's \"one linear solve\"). Full run: the deck's "
+             "whole run, extrapolated from the steps run where marked.", ""]
+    for case in options.cases:
+        spec = CASES[case]
+        kind = spec["kind"]
+        unit = "per linear solve" if kind == "implicit" else "per step"
+        lines += [f"## {spec['title']}", "",
+                  f"| Δx [mm] | paper DOF | free DOF | CPU {unit} [s] | GPU {unit} [s] | ratio | CPU full run [s] | "
+                  "GPU full run [s] | ratio | paper CPU [s] | paper GPU [s] | paper ratio | ours vs paper GPU |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for spacing, paper_dof, paper_gpu, paper_cpu, _ in spec["grids"]:
+            entry = results.get((case, spacing))
+            if not entry:
+                continue
+            cpu, gpu = entry.get("host"), entry.get("device")
+            facts = (cpu or gpu)[1]
+            cpu_step = per_step(kind, *cpu) if cpu else None
+            gpu_step = per_step(kind, *gpu) if gpu else None
+            cpu_full, cpu_extra = full_run(kind, *cpu) if cpu else (None, False)
+            gpu_full, gpu_extra = full_run(kind, *gpu) if gpu else (None, False)
+            # Table 4 times one linear solve: compare with ours per solve, not a full run.
+            ours_for_paper = gpu_step if kind == "implicit" else gpu_full
+            lines.append(
+                f"| {spacing * 1e3:g} | {paper_dof and f'{paper_dof:,}' or '–'} | {facts['free_dof']:,} | "
+                f"{seconds_text(cpu_step)} | {seconds_text(gpu_step)} | {ratio_text(cpu_step, gpu_step)} | "
+                f"{seconds_text(cpu_full, cpu_extra)} | {seconds_text(gpu_full, gpu_extra)} | "
+                f"{ratio_text(cpu_full, gpu_full)} | {seconds_text(paper_cpu)} | {seconds_text(paper_gpu)} | "
+                f"{ratio_text(paper_cpu, paper_gpu)} | {ratio_text(paper_gpu, ours_for_paper)} |")
+        first = next((results.get((case, g[0])) for g in spec["grids"]
+                      if results.get((case, g[0]), {}).get("host") and results.get((case, g[0]), {}).get("device")),
+                     None)
+        if first:
+            cpu, gpu = first["host"], first["device"]
+            spacing = first["spacing"]
+            lines += ["", f"Phases at Δx {spacing * 1e3:g} mm ({cpu[1]['steps']} CPU and {gpu[1]['steps']} GPU "
+                          f"{'increments' if kind == 'implicit' else 'steps'}; the paper's Table 3 columns):", "",
+                      "| phase | CPU [s] | GPU [s] | ratio |", "|---|---|---|---|"]
+            for label, c, g in phase_rows(kind, cpu, gpu):
+                lines.append(f"| {label} | {seconds_text(c)} | {seconds_text(g)} | {ratio_text(c, g)} |")
+            if "phase_paper" in spec:
+                lines += ["", "The paper's Table 3 (one Newton iteration at 0.5 mm, 50 % PD; CPU / GPU [s]): " +
+                          ", ".join(f"{k} {c} / {g}" for k, (c, g) in spec["phase_paper"].items()) + "."]
+        lines.append("")
+    md_path = os.path.join(out, "speedup.md")
+    with open(md_path + ".tmp", "w", encoding="utf-8") as stream:
+        stream.write("\n".join(lines))
+    os.replace(md_path + ".tmp", md_path)
+    paths = [csv_path, md_path]
+    chart = write_chart(out, results, options)
+    if chart:
+        paths.append(chart)
+    return paths
+
+
+def write_chart(out, results, options):
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("speedup: matplotlib is missing; no chart", file=sys.stderr)
+        return None
+    figure, axes = plt.subplots(figsize=(7, 4.5))
+    for index, case in enumerate(options.cases):
+        spec = CASES[case]
+        ours, paper = [], []
+        for spacing, paper_dof, paper_gpu, paper_cpu, _ in spec["grids"]:
+            entry = results.get((case, spacing))
+            if not entry or not paper_dof or not entry.get("host") or not entry.get("device"):
+                continue
+            ours.append((paper_dof, per_step(spec["kind"], *entry["host"]) / per_step(spec["kind"], *entry["device"])))
+            paper.append((paper_dof, paper_cpu / paper_gpu))
+        colour = f"C{index}"
+        if ours:
+            axes.plot(*zip(*ours), "o-", color=colour, label=f"{case}: perishell (CPU {options.cpu_threads} thr. / GPU)")
+        if paper:
+            axes.plot(*zip(*paper), "s--", color=colour, alpha=0.6, label=f"{case}: paper (its CPU / its GPU)")
+    axes.set_xscale("log")
+    axes.set_yscale("log")
+    axes.set_xlabel("DOF (the paper's count, elements × 24)")
+    axes.set_ylabel("speedup, CPU time / GPU time")
+    axes.grid(True, which="both", alpha=0.3)
+    axes.legend(fontsize=7)
+    figure.tight_layout()
+    path = os.path.join(out, "speedup.png")
+    figure.savefig(path + ".tmp.png", dpi=150)
+    os.replace(path + ".tmp.png", path)
+    plt.close(figure)
+    return path
+
+
+def parse_arguments(arguments):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--app", required=True, help="the perishell executable (a CUDA build runs both backends)")
+    parser.add_argument("--out", required=True, help="directory for speedup.csv, speedup.md, speedup.png")
+    parser.add_argument("--cases", default="pressed,steel,prism,cylinder,glass",
+                        help="comma-separated, of: " + ", ".join(CASES))
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--cpu-threads", type=int, default=2)
+    parser.add_argument("--cpu-steps", type=int, default=200, help="explicit steps on the CPU (0: the whole deck)")
+    parser.add_argument("--gpu-steps", type=int, default=0, help="explicit steps on the GPU (0: the whole deck)")
+    parser.add_argument("--quick", action="store_true", help="only each case's coarsest grid")
+    parser.add_argument("--machine", default="", help="the machine, for the report (default: from /proc/cpuinfo and nvidia-smi)")
+    options = parser.parse_args(arguments)
+    options.cases = [c for c in options.cases.split(",") if c]
+    unknown = [c for c in options.cases if c not in CASES]
+    if unknown:
+        parser.error(f"--cases: unknown case(s) {', '.join(unknown)}; known: {', '.join(CASES)}")
+    for name in ("repeats", "cpu_threads"):
+        if getattr(options, name) < 1:
+            parser.error(f"--{name.replace('_', '-')}: must be at least 1")
+    for name in ("cpu_steps", "gpu_steps"):
+        if getattr(options, name) < 0:
+            parser.error(f"--{name.replace('_', '-')}: must be 0 or more")
+    if not os.access(options.app, os.X_OK):
+        parser.error(f"--app: '{options.app}' is not an executable")
+    return options
+
+
+def describe_machine():
+    cpu = "unknown CPU"
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as stream:
+            names = re.findall(r"^model name\s*:\s*(.+)$", stream.read(), flags=re.M)
+        if names:
+            cpu = f"{names[0].strip()} ({len(names)} logical CPUs)"
+    except OSError:
+        pass
+    try:
+        gpu = subprocess.run(["nvidia-smi", "--query-gpu=name", "--format=csv,noheader"], capture_output=True,
+                             text=True, timeout=30).stdout.strip().splitlines()
+    except (OSError, subprocess.SubprocessError):
+        gpu = []
+    return f"Machine: {cpu}" + (f"; GPU: {gpu[0]}" if gpu else "; no GPU (the device backend is the host's)")
+
+
+def main(arguments):
+    options = parse_arguments(arguments)
+    os.makedirs(options.out, exist_ok=True)
+    machine = options.machine or describe_machine()
+    results = {}
+    with tempfile.TemporaryDirectory(prefix="perishell-speedup-") as work:
+        for case in options.cases:
+            spec = CASES[case]
+            grids = spec["grids"][:1] if options.quick else spec["grids"]
+            for index, (spacing, paper_dof, _, _, on_cpu) in enumerate(grids):
+                entry = {"spacing": spacing, "paper_dof": paper_dof}
+                implicit = spec["kind"] == "implicit"
+                split = not implicit and index == 0  # the phase table's grid
+                if on_cpu:
+                    entry["host"] = measure(options.app, case, spacing, "host", 1 if implicit else options.cpu_steps,
+                                            options.cpu_threads, options.repeats, work, split)
+                entry["device"] = measure(options.app, case, spacing, "device", 1 if implicit else options.gpu_steps,
+                                          options.cpu_threads, options.repeats, work, split)
+                results[(case, spacing)] = entry
+    for path in write_outputs(options.out, results, options, machine):
+        print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main(sys.argv[1:]))
+    except SpeedupError as error:
+        print(f"speedup: error: {error}", file=sys.stderr)
+        sys.exit(1)

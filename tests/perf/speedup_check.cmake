@@ -1,0 +1,45 @@
+# cmake -DPYTHON=python3 -DAPP=perishell -DROOT=<source> -DWORK=<dir> -P speedup_check.cmake
+# perf/speedup.py on short runs of two paper decks (explicit and implicit), then
+# perf/results_report.py on its output: the tables carry numbers for both backends.
+file(REMOVE_RECURSE "${WORK}")
+execute_process(
+  COMMAND "${PYTHON}" "${ROOT}/perf/speedup.py" --app "${APP}" --out "${WORK}/out/speedup" --cases glass,pressed
+          --quick --repeats 1 --cpu-steps 3 --gpu-steps 4 --machine "CTest"
+  RESULT_VARIABLE exit_code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT exit_code EQUAL 0)
+  message(FATAL_ERROR "speedup.py exited ${exit_code}:\n${out}\n${err}")
+endif()
+file(READ "${WORK}/out/speedup/speedup.md" report)
+# Glass: 3 CPU and 4 GPU steps of the deck's 755; a ratio and the extrapolated full run.
+foreach(expected
+    "## 4.1.2 glass plate"
+    "\\| 0.5 \\| – \\| 97,686 \\| [0-9.e-]+ \\| [0-9.e-]+ \\| [0-9.]+× \\| [0-9.,]+ \\(extrap.\\) \\|"
+    "Phases at Δx 0.5 mm \\(3 CPU and 4 GPU steps"
+    "\\| stress update \\(forces\\) \\| [0-9.e-]+ \\| [0-9.e-]+ \\|"
+    "## 4.2.1 pressed plate"
+    "\\| 0.5 \\| 259,200 \\| [0-9,]+ \\| [0-9.e-]+ \\| [0-9.e-]+ \\| [0-9.]+× \\| [0-9.,]+ \\(extrap.\\) \\| [0-9.,]+ \\(extrap.\\) \\| [0-9.]+× \\| 1,229 \\| 163 \\| 7.5× \\|"
+    "\\| linear solve \\(PCG\\) \\| [0-9.e-]+ \\| [0-9.e-]+ \\|")
+  if(NOT report MATCHES "${expected}")
+    message(FATAL_ERROR "speedup.md lacks '${expected}':\n${report}")
+  endif()
+endforeach()
+file(STRINGS "${WORK}/out/speedup/speedup.csv" rows)
+list(GET rows 0 header)
+if(NOT header STREQUAL "case,spacing_m,paper_dof,free_dof,nodes,backend,threads,steps,deck_steps,newton_iterations,repeats,phase,seconds")
+  message(FATAL_ERROR "speedup.csv header: ${header}")
+endif()
+
+execute_process(
+  COMMAND "${PYTHON}" "${ROOT}/perf/results_report.py" "${WORK}/out" --docs "${WORK}/docs"
+  RESULT_VARIABLE exit_code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT exit_code EQUAL 0)
+  message(FATAL_ERROR "results_report.py exited ${exit_code}:\n${out}\n${err}")
+endif()
+file(READ "${WORK}/docs/results.md" results)
+foreach(expected "## CPU vs GPU" "### 4.1.2 glass plate" "## Speed against accuracy.*Not measured"
+                 "## The paper's explicit examples.*Not measured")
+  if(NOT results MATCHES "${expected}")
+    message(FATAL_ERROR "results.md lacks '${expected}':\n${results}")
+  endif()
+endforeach()
+message(STATUS "speedup and report: OK")
