@@ -15,7 +15,10 @@
 #        report    docs/results.md and docs/images/results/ from OUT
 #        (default: all four, in that order)
 # Environment: PYTHON (default /usr/bin/python3 if it has matplotlib, else python3),
-# SPEEDUP_ARGS (extra perf/speedup.py options, e.g. "--repeats 1 --quick").
+# SPEEDUP_ARGS (extra perf/speedup.py options, e.g. "--repeats 1 --quick"),
+# ACCURACY_BACKEND (device, host or both, default both: each run writes
+# OUT/accuracy/accuracy_<backend>.csv, and the charts draw every such file there, so the
+# CPU curves can come from a CPU machine and the GPU ones from a GPU machine).
 set -euo pipefail
 if [[ $# -lt 2 ]]; then
   sed -n '2,20p' "$0" >&2
@@ -59,9 +62,12 @@ for part in "${parts[@]}"; do
       # shellcheck disable=SC2086
       "$python" "$root/perf/speedup.py" --app "$(find_binary apps/perishell)" --out "$out/speedup" ${SPEEDUP_ARGS:-} ;;
     accuracy)
+      backend=${ACCURACY_BACKEND:-both}
       stamp "$out/accuracy"
-      OMP_NUM_THREADS=2 "$(find_binary perf/perishell_perf_accuracy_cost)" --backend both --out "$out/accuracy/accuracy.csv"
-      "$python" "$root/perf/charts/speed_accuracy.py" "$out/accuracy/accuracy.csv" --out "$out/accuracy/accuracy" ;;
+      cp "$out/accuracy/machine.txt" "$out/accuracy/machine_$backend.txt"
+      OMP_NUM_THREADS=2 "$(find_binary perf/perishell_perf_accuracy_cost)" --backend "$backend" \
+        --out "$out/accuracy/accuracy_$backend.csv"
+      "$python" "$root/perf/charts/speed_accuracy.py" "$out"/accuracy/accuracy_*.csv --out "$out/accuracy/accuracy" ;;
     examples)
       app=$(find_binary apps/perishell)
       stamp "$out/examples"

@@ -8,6 +8,7 @@ machine.txt); a part that is missing is reported as not measured. Stdlib only.
 """
 import argparse
 import csv
+import glob
 import math
 import os
 import re
@@ -29,8 +30,8 @@ class ReportError(Exception):
     pass
 
 
-def machine(part_dir):
-    path = os.path.join(part_dir, "machine.txt")
+def machine(part_dir, path=None):
+    path = path or os.path.join(part_dir, "machine.txt")
     if not os.path.exists(path):
         return "machine not recorded"
     facts = dict(line.split(": ", 1) for line in open(path, encoding="utf-8").read().splitlines() if ": " in line)
@@ -68,14 +69,19 @@ def speedup_section(out, images):
 
 def accuracy_section(out, images):
     part = os.path.join(out, "accuracy")
-    path = os.path.join(part, "accuracy.csv")
-    if not os.path.exists(path):
+    paths = sorted(glob.glob(os.path.join(part, "accuracy_*.csv")))
+    if not paths:
         return ["## Speed against accuracy", "", "Not measured (`perf/results.sh BUILD OUT accuracy`).", ""]
-    rows = list(csv.DictReader(open(path, encoding="utf-8")))
+    rows = [row for path in paths for row in csv.DictReader(open(path, encoding="utf-8"))]
+    measured = []
+    for path in paths:
+        backend = os.path.basename(path)[len("accuracy_"):-len(".csv")]
+        stamp = os.path.join(part, f"machine_{backend}.txt")
+        measured.append(f"`--backend {backend}`: {machine(part, stamp)}")
     lines = ["## Speed against accuracy (`perf/accuracy_cost.cpp`, `perf/charts/speed_accuracy.py`)", "",
-             f"Measured {machine(part)}. Error against the references of model.md §8, wall time from model build "
-             "to answer. Per case: every run, then its chart (log–log error against wall time, one curve per "
-             "backend and swept parameter).", ""]
+             "Measured " + "; ".join(measured) + ". Error against the references of model.md §8, wall time from "
+             "model build to answer. Per case: every run, then its chart (log–log error against wall time, one "
+             "curve per backend and swept parameter).", ""]
     for case in dict.fromkeys(row["case"] for row in rows):
         case_rows = [row for row in rows if row["case"] == case]
         lines += [f"### {case}: reference {case_rows[0]['reference']}", "",

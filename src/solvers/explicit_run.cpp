@@ -143,9 +143,8 @@ class RunOutput {
       switch (quantity) {
         case deck::HistoryQuantity::Energy: {
           const auto e = solver.energies();
-          for (const double value :
-               {e.kinetic, e.strain, e.fracture, e.damping, e.externalWork, e.supportWork, e.balanceError()})
-            row.push_back(value);
+          row.insert(row.end(),
+                     {e.kinetic, e.strain, e.fracture, e.damping, e.externalWork, e.supportWork, e.balanceError()});
           break;
         }
         case deck::HistoryQuantity::Reactions: {
