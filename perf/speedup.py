@@ -21,7 +21,7 @@ were run. Both DOF counts are reported: the paper's (elements x 24, model.md §7
 free DOF. Stdlib only, so it runs on the GPU machine as it is.
 
   python3 perf/speedup.py --app build/cuda/apps/perishell --out speedup [--cases steel,prism]
-      [--repeats 3] [--cpu-threads 2] [--cpu-steps 20] [--gpu-steps 0] [--long-run 30] [--quick]
+      [--repeats 3] [--cpu-threads 2] [--cpu-steps 20] [--gpu-steps 0] [--long-run 30] [--quick] [--append]
 """
 import argparse
 import csv
@@ -212,11 +212,35 @@ def phase_rows(kind, cpu, gpu):
     return rows
 
 
+def measured_cases(results):
+    """The cases in results, in the order of CASES."""
+    return [case for case in CASES if any(key[0] == case for key in results)]
+
+
+def load_previous(out):
+    """The results of an earlier run from OUT/speedup.csv ({} when there is none)."""
+    path = os.path.join(out, "speedup.csv")
+    results = {}
+    if not os.path.exists(path):
+        return results
+    with open(path, encoding="utf-8") as stream:
+        for row in csv.DictReader(stream):
+            key = (row["case"], float(row["spacing_m"]))
+            entry = results.setdefault(key, {"spacing": key[1],
+                                             "paper_dof": int(row["paper_dof"]) if row["paper_dof"] else None})
+            facts = {"free_dof": int(row["free_dof"]), "nodes": int(row["nodes"]), "steps": int(row["steps"]),
+                     "deck_steps": int(row["deck_steps"]), "backend_name": row["backend"],
+                     "newton": int(row["newton_iterations"]) if row["newton_iterations"] else None,
+                     "repeats": int(row["repeats"])}
+            entry.setdefault(row["role"], ({}, facts))[0][row["phase"]] = float(row["seconds"])
+    return results
+
+
 def write_outputs(out, results, options, machine):
     csv_path = os.path.join(out, "speedup.csv")
     with open(csv_path + ".tmp", "w", newline="", encoding="utf-8") as stream:
         writer = csv.writer(stream)
-        writer.writerow(["case", "spacing_m", "paper_dof", "free_dof", "nodes", "backend", "threads", "steps",
+        writer.writerow(["case", "spacing_m", "paper_dof", "free_dof", "nodes", "role", "backend", "threads", "steps",
                          "deck_steps", "newton_iterations", "repeats", "phase", "seconds"])
         for (case, spacing), entry in results.items():
             for backend in ("host", "device"):
@@ -226,19 +250,21 @@ def write_outputs(out, results, options, machine):
                 phases, facts = measured
                 for phase, seconds in phases.items():
                     writer.writerow([case, spacing, entry["paper_dof"] or "", facts["free_dof"], facts["nodes"],
-                                     facts["backend_name"], options.cpu_threads, facts["steps"],
+                                     backend, facts["backend_name"], options.cpu_threads, facts["steps"],
                                      facts["deck_steps"], facts["newton"] or "", facts["repeats"], phase,
                                      f"{seconds:.9g}"])
     os.replace(csv_path + ".tmp", csv_path)
 
     lines = [f"# CPU vs GPU: the paper's examples", "",
-             f"{machine}. Command: `{' '.join(sys.argv)}`; {time.strftime('%Y-%m-%d')}. "
+             f"{machine}. Command: `{' '.join(sys.argv)}`"
+             f"{' (the other cases: an earlier run, kept by --append)' if options.append else ''}; "
+             f"{time.strftime('%Y-%m-%d')}. "
              f"CPU = `--backend host` on {options.cpu_threads} OpenMP threads, GPU = `--backend device`; "
              f"medians of {options.repeats} runs (one where a run takes over {options.long_run:g} s). DOF: the paper's count (elements × 24) and ours (free DOF). "
              "Per step: the explicit steps' time over the steps run; implicit: preconditioner + PCG per "
              "Newton iteration of the first increment (the paper's \"one linear solve\"). Full run: the deck's "
              "whole run, extrapolated from the steps run where marked.", ""]
-    for case in options.cases:
+    for case in measured_cases(results):
         spec = CASES[case]
         kind = spec["kind"]
         unit = "per linear solve" if kind == "implicit" else "per step"
@@ -299,7 +325,7 @@ def write_chart(out, results, options):
         print("speedup: matplotlib is missing; no chart", file=sys.stderr)
         return None
     figure, axes = plt.subplots(figsize=(7, 4.5))
-    for index, case in enumerate(options.cases):
+    for index, case in enumerate(measured_cases(results)):
         spec = CASES[case]
         ours, paper = [], []
         for spacing, paper_dof, paper_gpu, paper_cpu, _ in spec["grids"]:
@@ -340,6 +366,8 @@ def parse_arguments(arguments):
     parser.add_argument("--long-run", type=float, default=30.0,
                         help="a point whose first run takes longer [s] is not repeated")
     parser.add_argument("--quick", action="store_true", help="only each case's coarsest grid")
+    parser.add_argument("--append", action="store_true",
+                        help="keep the other cases of OUT/speedup.csv (from an earlier run) in the tables")
     parser.add_argument("--machine", default="", help="the machine, for the report (default: from /proc/cpuinfo and nvidia-smi)")
     options = parser.parse_args(arguments)
     options.cases = [c for c in options.cases.split(",") if c]
@@ -378,7 +406,8 @@ def main(arguments):
     options = parse_arguments(arguments)
     os.makedirs(options.out, exist_ok=True)
     machine = options.machine or describe_machine()
-    results = {}
+    results = {key: entry for key, entry in load_previous(options.out).items() if key[0] not in options.cases} \
+        if options.append else {}
     with tempfile.TemporaryDirectory(prefix="perishell-speedup-") as work:
         for case in options.cases:
             spec = CASES[case]

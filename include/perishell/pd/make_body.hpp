@@ -117,10 +117,16 @@ KOKKOS_INLINE_FUNCTION void solveShiftedCholesky(double A[n][n], double b[n], do
 // the body into CCM elements (the outer edge of a coupling transition, model.md §4). Their
 // missing neighbours are not free surface and the morphing weights them out anyway
 // (coupling/morphing.hpp), so they fit no second harmonic: g and the fourth harmonic only.
+// quadratureBonds (optional: body.bonds) are the bonds the node weights are fitted to: the
+// list before pre-cracks cut it. A pre-crack is a crack, not a free edge: the nodes along it
+// keep the weights of the uncut lattice, as nodes along a crack that opens in the run do.
+// Fitting the cut bonds made the faces above and below a pre-crack (cut from one side only,
+// docs/model-setup.md) differ, and the glass plate 4.1.2 branched lopsidedly.
 template <class ExecutionSpaceT, class MemorySpaceT>
 void computeStiffnessScales(const ExecutionSpaceT& space, PdBody<MemorySpaceT>& body, double horizon,
                             double thickness,
-                            const Kokkos::View<const std::uint8_t*, MemorySpaceT>& nodesAtCcmInterface = {}) {
+                            const Kokkos::View<const std::uint8_t*, MemorySpaceT>& nodesAtCcmInterface = {},
+                            const std::optional<BondList<MemorySpaceT>>& quadratureBonds = std::nullopt) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   using detail::numHarmonics;
   const double pi = 3.14159265358979323846;
@@ -130,7 +136,7 @@ void computeStiffnessScales(const ExecutionSpaceT& space, PdBody<MemorySpaceT>& 
   // Per node and weighting: g, g a_c, g a_s, g b_c, g b_s.
   Kokkos::View<double* [2][1 + numHarmonics], Kokkos::LayoutRight, MemorySpaceT> nodeFactors(
       "pd node quadrature factors", body.numNodes());
-  const auto bonds = body.bonds;
+  const auto bonds = quadratureBonds ? *quadratureBonds : body.bonds;
   const auto volumes = body.volumes;
   const auto positions = body.referencePositions;
   const auto normals = body.referenceNormals;
@@ -189,12 +195,13 @@ void computeStiffnessScales(const ExecutionSpaceT& space, PdBody<MemorySpaceT>& 
           for (int k = 0; k < numHarmonics; ++k) nodeFactors(node, m, 1 + k) = g * a[k];
         }
       });
-  body.stiffnessScale = decltype(body.stiffnessScale)("pd stiffness scale", bonds.numBonds());
+  const auto bodyBonds = body.bonds;
+  body.stiffnessScale = decltype(body.stiffnessScale)("pd stiffness scale", bodyBonds.numBonds());
   const auto scale = body.stiffnessScale;
   Kokkos::parallel_for(
-      "perishell::pd::computeStiffnessScales::bonds", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, bonds.numBonds()),
+      "perishell::pd::computeStiffnessScales::bonds", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, bodyBonds.numBonds()),
       KOKKOS_LAMBDA(const RowOffset b) {
-        const LocalIndex ends[2] = {bonds.halfBonds(b, 0), bonds.halfBonds(b, 1)};
+        const LocalIndex ends[2] = {bodyBonds.halfBonds(b, 0), bodyBonds.halfBonds(b, 1)};
         // The harmonics are even: they do not change when the direction reverses.
         const double d[3] = {positions(ends[1], 0) - positions(ends[0], 0), positions(ends[1], 1) - positions(ends[0], 1),
                              positions(ends[1], 2) - positions(ends[0], 2)};
@@ -278,9 +285,12 @@ PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
         for (int d = 0; d < 3; ++d) normals(k, d) = allNormals(nodes(k), d);
         volumes(k) = allVolumes(nodes(k));
       });
+  std::optional<BondList<MemorySpaceT>> uncutBonds;
+  if (!preCracks.empty()) uncutBonds = buildBondsAmong(space, hostMesh, pdNodes, horizon, gridSpacing, {}).bonds;
   computeStiffnessScales(space, body, horizon, material.thickness,
                          Kokkos::View<const std::uint8_t*, MemorySpaceT>(
-                             Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, nodesAtCcmInterface)));
+                             Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, nodesAtCcmInterface)),
+                         uncutBonds);
   return body;
 }
 
