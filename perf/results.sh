@@ -48,7 +48,7 @@ stamp() {
   mkdir -p "$1"
   {
     echo "date: $(date -u +%Y-%m-%d)"
-    echo "cpu: $(grep -m1 '^model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //') ($(nproc) logical CPUs)"
+    echo "cpu: $(grep -m1 '^model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //') ($(nproc --all) logical CPUs)"
     echo "gpu: $(nvidia-smi --query-gpu=name --format=csv,noheader 2> /dev/null | head -1 || true)"
     echo "build: $build"
   } > "$1/machine.txt"

@@ -114,7 +114,7 @@ def examples_section(out, images):
         return ["## The paper's explicit examples", "", "Not measured (`perf/results.sh BUILD OUT examples`).", ""]
     lines = ["## The paper's explicit examples, run to the end", "", f"Measured {machine(part)}, on the device "
              "backend. Damage images: `perf/charts/render_results.py damage`, three output steps each.", "",
-             "| example | nodes | steps | wall time | per step | broken bonds | the paper's GPU |",
+             "| example | nodes | steps | wall time | steps' time per step | broken bonds | the paper's GPU |",
              "|---|---|---|---|---|---|---|"]
     figures = []
     for deck, title in EXAMPLES:
@@ -124,12 +124,14 @@ def examples_section(out, images):
             continue
         log = open(log_path, encoding="utf-8").read()
         nodes = re.search(r"model\s+([0-9,]+) nodes", log)
-        wall = summary_value(log, "wall time")
-        per_step = re.search(r"\(([0-9.e+-]+ s) per step\)", wall)
+        steps = int(summary_value(log, "steps").split()[0])
+        with open(os.path.join(part, deck, "timings.csv"), encoding="utf-8") as stream:
+            phases = {row["phase"]: float(row["seconds"]) for row in csv.DictReader(stream)}
         paper = PAPER_GPU.get(deck)
-        lines.append(f"| {title} | {nodes[1] if nodes else '?'} | {summary_value(log, 'steps')} | "
-                     f"{wall.split(' (')[0]} | {per_step[1] if per_step else '?'} | "
-                     f"{summary_value(log, 'broken bonds')} | {f'{paper:,} s' if paper else '–'} |")
+        lines.append(f"| {title} | {nodes[1] if nodes else '?'} | {steps:,} | {phases['total']:.3g} s "
+                     f"(set-up {phases['setup']:.2g} s, output {phases['output']:.2g} s) | "
+                     f"{1e3 * phases['steps'] / steps:.3g} ms | {summary_value(log, 'broken bonds')} | "
+                     f"{f'{paper:,} s' if paper else '–'} |")
         panel = images.link(os.path.join(part, deck, f"{deck}_damage_panel.png"), f"{deck}_damage.png")
         if panel:
             figures.append(f"**{title}**: damage\n\n![{title}: damage]({panel})\n")
@@ -137,8 +139,8 @@ def examples_section(out, images):
     speed = images.link(os.path.join(part, "glass_plate_4_1_2", "tip_speed.png"), "glass_tip_speed.png")
     if speed:
         history = os.path.join(part, "glass_plate_4_1_2", "history.csv")
-        top = max((float(r["crack-tip-speed [m/s]"]) for r in csv.DictReader(open(history, encoding="utf-8"))
-                   if r.get("crack-tip-speed [m/s]") not in (None, "", "nan")), default=float("nan"))
+        speeds = [float(row["crack-tip-speed"]) for row in csv.DictReader(open(history, encoding="utf-8"))]
+        top = max((speed for speed in speeds if math.isfinite(speed)), default=float("nan"))
         lines += [f"Glass plate crack tip speed (largest between history rows: {top:.0f} m/s; Rayleigh speed "
                   f"about 3058 m/s, model.md §8):", "", f"![glass crack tip speed]({speed})", ""]
     opening = images.link(os.path.join(part, "steel_plate_4_2_2", "load_opening.png"), "steel_load_opening.png")

@@ -21,7 +21,8 @@ were run. Both DOF counts are reported: the paper's (elements x 24, model.md §7
 free DOF. Stdlib only, so it runs on the GPU machine as it is.
 
   python3 perf/speedup.py --app build/cuda/apps/perishell --out speedup [--cases steel,prism]
-      [--repeats 3] [--cpu-threads 2] [--cpu-steps 20] [--gpu-steps 0] [--long-run 30] [--quick] [--append]
+      [--repeats 3] [--cpu-threads 2] [--cpu-steps 20] [--gpu-steps 0] [--long-run 30] [--quick]
+      [--spacing DX] [--append]
 """
 import argparse
 import csv
@@ -84,14 +85,37 @@ class SpeedupError(Exception):
     pass
 
 
+def steel_flanks_at_spacing(text, spacing, deck_path):
+    """The steel plate's flank node sets and forces on another grid: the node columns either
+    side of the crack line x = 101.5 mm, and the deck's 1800 N per flank shared by their nodes."""
+    crack_x, y_low, y_high, total = 0.1015, 0.0865, 0.1165, 1800.0
+    columns = {"left-flank": crack_x - spacing, "right-flank": crack_x}
+    for name, x in columns.items():
+        text, count = re.subn(rf"^(\s+{name}: {{box: {{min: \[)[^,]+(, [^,]+, [^\]]+\], max: \[)[^,]+",
+                              lambda m: f"{m.group(1)}{x - spacing / 4:.6g}{m.group(2)}{x + spacing / 4:.6g}", text,
+                              count=1, flags=re.M)
+        if count != 1:
+            raise SpeedupError(f"{deck_path}: no '{name}' box to move")
+    nodes = math.floor(y_high / spacing + 1e-9) - math.ceil(y_low / spacing - 1e-9) + 1
+    for name, sign in (("lift-left-flank", 1.0), ("push-right-flank", -1.0)):
+        text, count = re.subn(rf"^(\s+{name}: {{.*vector: \[0.0, 0.0, )[-+0-9.eE]+",
+                              lambda m: f"{m.group(1)}{sign * total / nodes!r}", text, count=1, flags=re.M)
+        if count != 1:
+            raise SpeedupError(f"{deck_path}: no '{name}' load to scale")
+    return text
+
+
 def deck_at_spacing(deck_path, spacing, directory):
-    """The deck with mesh.spacing replaced (the first `spacing:` key), written to directory."""
+    """The deck with mesh.spacing replaced (the first `spacing:` key), written to directory;
+    the steel plate's flanks follow the grid."""
     with open(deck_path, encoding="utf-8") as stream:
         text = stream.read()
     new_text, count = re.subn(r"^(\s+spacing:\s*)[-+0-9.eE]+", lambda m: f"{m.group(1)}{spacing!r}", text,
                               count=1, flags=re.M)
     if count != 1:
         raise SpeedupError(f"{deck_path}: no 'spacing:' key to set")
+    if os.path.basename(deck_path) == CASES["steel"]["deck"]:
+        new_text = steel_flanks_at_spacing(new_text, spacing, deck_path)
     path = os.path.join(directory, f"{os.path.basename(deck_path)[:-5]}_{spacing * 1e3:g}mm.yaml")
     with open(path, "w", encoding="utf-8") as stream:
         stream.write(new_text)
@@ -197,18 +221,23 @@ def phase_rows(kind, cpu, gpu):
                  ("preconditioner (AMG set-up)", "preconditioner"), ("stress update (internal forces)",
                                                                       "internal-forces"),
                  ("update (u, R)", "update"), ("output", "output"), ("total", "total")]
-    else:
-        names = [("setup (neighbour search, bonds, critical step)", "setup"), ("stress update (forces)", "forces"),
-                 ("integration", "integration"), ("energy monitor", "monitor"), ("all steps", "steps"),
-                 ("output", "output"),
-                 ("total", "total")]
+    else:  # the runs took different numbers of steps: step phases per step
+        names = [("setup (neighbour search, bonds, critical step)", "setup"),
+                 ("stress update (forces), per step", "forces"), ("integration, per step", "integration"),
+                 ("energy monitor, per step", "monitor"), ("all steps, per step", "steps")]
+    per_step_phases = {"forces", "integration", "monitor", "steps"}
+
+    def value(measured, key):
+        if not measured or key not in measured[0]:
+            return None
+        seconds = measured[0][key]
+        return seconds / measured[1]["steps"] if kind == "explicit" and key in per_step_phases else seconds
+
     rows = []
     for label, key in names:
-        c = cpu[0].get(key) if cpu else None
-        g = gpu[0].get(key) if gpu else None
-        if c is None and g is None:
-            continue
-        rows.append((label, c, g))
+        c, g = value(cpu, key), value(gpu, key)
+        if c is not None or g is not None:
+            rows.append((label, c, g))
     return rows
 
 
@@ -229,6 +258,7 @@ def load_previous(out):
             entry = results.setdefault(key, {"spacing": key[1],
                                              "paper_dof": int(row["paper_dof"]) if row["paper_dof"] else None})
             facts = {"free_dof": int(row["free_dof"]), "nodes": int(row["nodes"]), "steps": int(row["steps"]),
+                     "elements": int(row["elements"]),
                      "deck_steps": int(row["deck_steps"]), "backend_name": row["backend"],
                      "newton": int(row["newton_iterations"]) if row["newton_iterations"] else None,
                      "repeats": int(row["repeats"])}
@@ -236,11 +266,11 @@ def load_previous(out):
     return results
 
 
-def write_outputs(out, results, options, machine):
+def write_outputs(out, results, options, runs):
     csv_path = os.path.join(out, "speedup.csv")
     with open(csv_path + ".tmp", "w", newline="", encoding="utf-8") as stream:
         writer = csv.writer(stream)
-        writer.writerow(["case", "spacing_m", "paper_dof", "free_dof", "nodes", "role", "backend", "threads", "steps",
+        writer.writerow(["case", "spacing_m", "paper_dof", "elements", "free_dof", "nodes", "role", "backend", "threads", "steps",
                          "deck_steps", "newton_iterations", "repeats", "phase", "seconds"])
         for (case, spacing), entry in results.items():
             for backend in ("host", "device"):
@@ -249,33 +279,36 @@ def write_outputs(out, results, options, machine):
                     continue
                 phases, facts = measured
                 for phase, seconds in phases.items():
-                    writer.writerow([case, spacing, entry["paper_dof"] or "", facts["free_dof"], facts["nodes"],
+                    writer.writerow([case, spacing, entry["paper_dof"] or "", facts["elements"], facts["free_dof"],
+                                     facts["nodes"],
                                      backend, facts["backend_name"], options.cpu_threads, facts["steps"],
                                      facts["deck_steps"], facts["newton"] or "", facts["repeats"], phase,
                                      f"{seconds:.9g}"])
     os.replace(csv_path + ".tmp", csv_path)
 
-    lines = [f"# CPU vs GPU: the paper's examples", "",
-             f"{machine}. Command: `{' '.join(sys.argv)}`"
-             f"{' (the other cases: an earlier run, kept by --append)' if options.append else ''}; "
-             f"{time.strftime('%Y-%m-%d')}. "
-             f"CPU = `--backend host` on {options.cpu_threads} OpenMP threads, GPU = `--backend device`; "
-             f"medians of {options.repeats} runs (one where a run takes over {options.long_run:g} s). DOF: the paper's count (elements × 24) and ours (free DOF). "
-             "Per step: the explicit steps' time over the steps run; implicit: preconditioner + PCG per "
-             "Newton iteration of the first increment (the paper's \"one linear solve\"). Full run: the deck's "
-             "whole run, extrapolated from the steps run where marked.", ""]
+    lines = ["# CPU vs GPU: the paper's examples", ""] + [f"{line}." for line in runs] + [
+        "",
+        f"CPU = `--backend host` on {options.cpu_threads} OpenMP threads, GPU = `--backend device` (one binary); "
+        f"medians of {options.repeats} runs (one where a run takes over {options.long_run:g} s). DOF: the paper's "
+        "count for its grid, ours by the same rule (elements × 24), and our free DOF. Per step: the explicit steps' "
+        "time over the steps run; implicit: preconditioner + PCG per Newton iteration of the first increment "
+        "(the paper's \"one linear solve\"). Full run: the deck's whole run, extrapolated from the steps run where "
+        "marked. Phase tables: the paper's Table 3 columns; explicit step phases per step, from one more run with "
+        "`--phase-times` (a synchronisation per phase).", ""]
     for case in measured_cases(results):
         spec = CASES[case]
         kind = spec["kind"]
         unit = "per linear solve" if kind == "implicit" else "per step"
         lines += [f"## {spec['title']}", "",
-                  f"| Δx [mm] | paper DOF | free DOF | CPU {unit} [s] | GPU {unit} [s] | ratio | CPU full run [s] | "
-                  "GPU full run [s] | ratio | paper CPU [s] | paper GPU [s] | paper ratio | ours vs paper GPU |",
-                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-        for spacing, paper_dof, paper_gpu, paper_cpu, _ in spec["grids"]:
-            entry = results.get((case, spacing))
-            if not entry:
-                continue
+                  f"| Δx [mm] | paper DOF | our elements × 24 | free DOF | CPU {unit} [s] | GPU {unit} [s] | ratio | "
+                  "CPU full run [s] | GPU full run [s] | ratio | paper CPU [s] | paper GPU [s] | paper ratio | "
+                  "ours vs paper GPU |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        paper = {grid[0]: grid[1:4] for grid in spec["grids"]}
+        spacings = sorted((key[1] for key in results if key[0] == case), reverse=True)
+        for spacing in spacings:
+            entry = results[(case, spacing)]
+            paper_dof, paper_gpu, paper_cpu = paper.get(spacing, (None, None, None))
             cpu, gpu = entry.get("host"), entry.get("device")
             facts = (cpu or gpu)[1]
             cpu_step = per_step(kind, *cpu) if cpu else None
@@ -285,19 +318,20 @@ def write_outputs(out, results, options, machine):
             # Table 4 times one linear solve: compare with ours per solve, not a full run.
             ours_for_paper = gpu_step if kind == "implicit" else gpu_full
             lines.append(
-                f"| {spacing * 1e3:g} | {paper_dof and f'{paper_dof:,}' or '–'} | {facts['free_dof']:,} | "
+                f"| {spacing * 1e3:g} | {paper_dof and f'{paper_dof:,}' or '–'} | {24 * facts['elements']:,} | "
+                f"{facts['free_dof']:,} | "
                 f"{seconds_text(cpu_step)} | {seconds_text(gpu_step)} | {ratio_text(cpu_step, gpu_step)} | "
                 f"{seconds_text(cpu_full, cpu_extra)} | {seconds_text(gpu_full, gpu_extra)} | "
                 f"{ratio_text(cpu_full, gpu_full)} | {seconds_text(paper_cpu)} | {seconds_text(paper_gpu)} | "
                 f"{ratio_text(paper_cpu, paper_gpu)} | {ratio_text(paper_gpu, ours_for_paper)} |")
-        first = next((results.get((case, g[0])) for g in spec["grids"]
-                      if results.get((case, g[0]), {}).get("host") and results.get((case, g[0]), {}).get("device")),
-                     None)
-        if first:
-            cpu, gpu = first["host"], first["device"]
-            spacing = first["spacing"]
-            lines += ["", f"Phases at Δx {spacing * 1e3:g} mm ({cpu[1]['steps']} CPU and {gpu[1]['steps']} GPU "
-                          f"{'increments' if kind == 'implicit' else 'steps'}; the paper's Table 3 columns):", "",
+        both = [spacing for spacing in spacings if results[(case, spacing)].get("host")
+                and results[(case, spacing)].get("device")]
+        if both:
+            spacing = both[0]
+            cpu, gpu = results[(case, spacing)]["host"], results[(case, spacing)]["device"]
+            what = "one increment" if kind == "implicit" else \
+                f"{cpu[1]['steps']} CPU and {gpu[1]['steps']} GPU steps; step phases per step"
+            lines += ["", f"Phases at Δx {spacing * 1e3:g} mm ({what}):", "",
                       "| phase | CPU [s] | GPU [s] | ratio |", "|---|---|---|---|"]
             for label, c, g in phase_rows(kind, cpu, gpu):
                 lines.append(f"| {label} | {seconds_text(c)} | {seconds_text(g)} | {ratio_text(c, g)} |")
@@ -329,11 +363,13 @@ def write_chart(out, results, options):
         spec = CASES[case]
         ours, paper = [], []
         for spacing, paper_dof, paper_gpu, paper_cpu, _ in spec["grids"]:
-            entry = results.get((case, spacing))
-            if not entry or not paper_dof or not entry.get("host") or not entry.get("device"):
+            if not paper_dof:
                 continue
-            ours.append((paper_dof, per_step(spec["kind"], *entry["host"]) / per_step(spec["kind"], *entry["device"])))
             paper.append((paper_dof, paper_cpu / paper_gpu))
+            entry = results.get((case, spacing))
+            if entry and entry.get("host") and entry.get("device"):
+                ours.append((paper_dof, per_step(spec["kind"], *entry["host"]) /
+                             per_step(spec["kind"], *entry["device"])))
         colour = f"C{index}"
         if ours:
             axes.plot(*zip(*ours), "o-", color=colour, label=f"{case}: perishell (CPU {options.cpu_threads} thr. / GPU)")
@@ -355,7 +391,7 @@ def write_chart(out, results, options):
 
 def parse_arguments(arguments):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--app", required=True, help="the perishell executable (a CUDA build runs both backends)")
+    parser.add_argument("--app", default="", help="the perishell executable (a CUDA build runs both backends)")
     parser.add_argument("--out", required=True, help="directory for speedup.csv, speedup.md, speedup.png")
     parser.add_argument("--cases", default="pressed,steel,prism,cylinder,glass",
                         help="comma-separated, of: " + ", ".join(CASES))
@@ -366,9 +402,14 @@ def parse_arguments(arguments):
     parser.add_argument("--long-run", type=float, default=30.0,
                         help="a point whose first run takes longer [s] is not repeated")
     parser.add_argument("--quick", action="store_true", help="only each case's coarsest grid")
+    parser.add_argument("--spacing", type=float, default=0.0,
+                        help="run each case at this grid spacing [m] only (no paper numbers; smoke tests)")
+    parser.add_argument("--report-only", action="store_true",
+                        help="measure nothing: rewrite speedup.md and speedup.png from OUT/speedup.csv")
     parser.add_argument("--append", action="store_true",
                         help="keep the other cases of OUT/speedup.csv (from an earlier run) in the tables")
-    parser.add_argument("--machine", default="", help="the machine, for the report (default: from /proc/cpuinfo and nvidia-smi)")
+    parser.add_argument("--machine", default="",
+                        help="the machine, for the report (default: from /proc/cpuinfo and nvidia-smi)")
     options = parser.parse_args(arguments)
     options.cases = [c for c in options.cases.split(",") if c]
     unknown = [c for c in options.cases if c not in CASES]
@@ -377,10 +418,12 @@ def parse_arguments(arguments):
     for name in ("repeats", "cpu_threads"):
         if getattr(options, name) < 1:
             parser.error(f"--{name.replace('_', '-')}: must be at least 1")
+    if options.spacing < 0 or not math.isfinite(options.spacing):
+        parser.error("--spacing: must be a positive number of metres")
     for name in ("cpu_steps", "gpu_steps"):
         if getattr(options, name) < 0:
             parser.error(f"--{name.replace('_', '-')}: must be 0 or more")
-    if not os.access(options.app, os.X_OK):
+    if not options.report_only and not os.access(options.app, os.X_OK):
         parser.error(f"--app: '{options.app}' is not an executable")
     return options
 
@@ -402,16 +445,35 @@ def describe_machine():
     return f"Machine: {cpu}" + (f"; GPU: {gpu[0]}" if gpu else "; no GPU (the device backend is the host's)")
 
 
+def record_run(out, options):
+    """OUT/runs.txt: the machine and command of each run that wrote OUT (--append adds a line)."""
+    path = os.path.join(out, "runs.txt")
+    earlier = open(path, encoding="utf-8").read().splitlines() if options.append and os.path.exists(path) else []
+    machine = options.machine or describe_machine()
+    line = (f"{time.strftime('%Y-%m-%d')}, {machine}: `{' '.join(sys.argv)}`")
+    runs = earlier + [line]
+    with open(path + ".tmp", "w", encoding="utf-8") as stream:
+        stream.write("\n".join(runs) + "\n")
+    os.replace(path + ".tmp", path)
+    return runs
+
+
 def main(arguments):
     options = parse_arguments(arguments)
     os.makedirs(options.out, exist_ok=True)
-    machine = options.machine or describe_machine()
+    if options.report_only:
+        runs = open(os.path.join(options.out, "runs.txt"), encoding="utf-8").read().splitlines()
+        for path in write_outputs(options.out, load_previous(options.out), options, runs):
+            print(path)
+        return 0
     results = {key: entry for key, entry in load_previous(options.out).items() if key[0] not in options.cases} \
         if options.append else {}
     with tempfile.TemporaryDirectory(prefix="perishell-speedup-") as work:
         for case in options.cases:
             spec = CASES[case]
             grids = spec["grids"][:1] if options.quick else spec["grids"]
+            if options.spacing:  # one grid outside the paper's tables
+                grids = [(options.spacing, None, None, None, True)]
             for index, (spacing, paper_dof, _, _, on_cpu) in enumerate(grids):
                 entry = {"spacing": spacing, "paper_dof": paper_dof}
                 implicit = spec["kind"] == "implicit"
@@ -422,7 +484,8 @@ def main(arguments):
                 entry["device"] = measure(options.app, case, spacing, "device", 1 if implicit else options.gpu_steps,
                                           options.cpu_threads, options.repeats, work, split, options.long_run)
                 results[(case, spacing)] = entry
-    for path in write_outputs(options.out, results, options, machine):
+    runs = record_run(options.out, options)
+    for path in write_outputs(options.out, results, options, runs):
         print(path)
     return 0
 
