@@ -77,6 +77,8 @@ for part in "${parts[@]}"; do
         grep -A20 "run summary" "$out/examples/$deck.log"
         "$python" "$root/perf/charts/render_results.py" damage "$out/examples/$deck/results.xmf" \
           --out "$out/examples/$deck/$deck"
+        "$python" "$root/perf/charts/render_results.py" damage "$out/examples/$deck/results.xmf" \
+          --field displacement --out "$out/examples/$deck/$deck"
       done
       "$python" "$root/perf/charts/render_results.py" history "$out/examples/glass_plate_4_1_2/history.csv" \
         --x time --y crack-tip-speed --x-scale 1e6 --xlabel "time [µs]" --ylabel "crack tip speed [m/s]" \

@@ -113,7 +113,7 @@ def examples_section(out, images):
     if not os.path.isdir(part):
         return ["## The paper's explicit examples", "", "Not measured (`perf/results.sh BUILD OUT examples`).", ""]
     lines = ["## The paper's explicit examples, run to the end", "", f"Measured {machine(part)}, on the device "
-             "backend. Damage images: `perf/charts/render_results.py damage`, three output steps each.", "",
+             "backend. Images: `perf/charts/render_results.py damage` (damage and displacement magnitude), up to three output steps each.", "",
              "| example | nodes | steps | wall time | steps' time per step | broken bonds | the paper's GPU |",
              "|---|---|---|---|---|---|---|"]
     figures = []
@@ -132,9 +132,11 @@ def examples_section(out, images):
                      f"(set-up {phases['setup']:.2g} s, output {phases['output']:.2g} s) | "
                      f"{1e3 * phases['steps'] / steps:.3g} ms | {summary_value(log, 'broken bonds')} | "
                      f"{f'{paper:,} s' if paper else '–'} |")
-        panel = images.link(os.path.join(part, deck, f"{deck}_damage_panel.png"), f"{deck}_damage.png")
-        if panel:
-            figures.append(f"**{title}**: damage\n\n![{title}: damage]({panel})\n")
+        for field in ("damage", "displacement"):
+            panel = images.link(os.path.join(part, deck, f"{deck}_{field}_panel.png"), f"{deck}_{field}.png")
+            if panel:
+                what = "damage" if field == "damage" else "displacement magnitude [m]"
+                figures.append(f"**{title}**: {what}\n\n![{title}: {what}]({panel})\n")
     lines += [""] + figures
     speed = images.link(os.path.join(part, "glass_plate_4_1_2", "tip_speed.png"), "glass_tip_speed.png")
     if speed:

@@ -164,10 +164,11 @@ def load_snapshot(step, field, mesh, deformed_scale, view):
         raise RenderError(f"step {step.index} (t = {step.time:g} s) has no field '{field}'; "
                           f"it has: {', '.join(sorted(step.fields)) or 'none'}")
     reference = step.fields[field]
-    if reference[2] != 1:
-        raise RenderError(f"field '{field}' is a vector; pick a scalar field")
     coordinates, quads = mesh
-    values = read_dataset(reference).reshape(-1)
+    values = read_dataset(reference)
+    if reference[2] != 1:  # a vector field (displacement, velocity): its magnitude
+        values = np.linalg.norm(values.reshape(-1, reference[2]), axis=1)
+    values = values.reshape(-1)
     if values.shape[0] != coordinates.shape[0]:
         raise RenderError(f"{reference[0]}:{reference[1]} has {values.shape[0]} values for "
                           f"{coordinates.shape[0]} nodes")
