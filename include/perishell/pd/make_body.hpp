@@ -286,7 +286,9 @@ PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
         volumes(k) = allVolumes(nodes(k));
       });
   std::optional<BondList<MemorySpaceT>> uncutBonds;
-  if (!preCracks.empty()) uncutBonds = buildBondsAmong(space, hostMesh, pdNodes, horizon, gridSpacing, {}).bonds;
+  if (!preCracks.empty())
+    uncutBonds = buildBondList(space, body.referencePositions, horizon, gridSpacing,
+                               Kokkos::View<const mesh::CrackSegment*, MemorySpaceT>());
   computeStiffnessScales(space, body, horizon, material.thickness,
                          Kokkos::View<const std::uint8_t*, MemorySpaceT>(
                              Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, nodesAtCcmInterface)),
