@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <random>
 
 namespace {
@@ -406,6 +407,34 @@ TEST(TEST_CATEGORY, microbeam_free_strip_stores_the_plate_energy_of_homogeneous_
       EXPECT_LT(std::abs(error), stripTolerance) << c.name << ", nu = " << nu;
     }
   }
+}
+
+// A pre-crack is a crack, not a free edge (pd/make_body.hpp): every bond it leaves keeps the
+// stiffness scales it has in the uncut body, so the faces either side of the crack are
+// weighted alike, as they would be after the crack opened in the run.
+TEST(TEST_CATEGORY, microbeam_pre_crack_keeps_the_uncut_stiffness_scales) {
+  const double spacing = 1e-3;
+  const auto shell = perishell::mesh::makePlate(24 * spacing, 24 * spacing, spacing);
+  const perishell::pd::PdMaterial material{70e9, 0.2, 0.4e-3, {}};
+  const auto nodes = perishell::pd::allNodes(shell.mesh.numNodes());
+  const perishell::mesh::CrackSegment crack{{6e-3, 12e-3, 0.0}, {18e-3, 12e-3, 0.0}, {0.0, 0.0, 1.0}};
+  const auto uncut = perishell::pd::makePdBody(TEST_EXECSPACE{}, shell.mesh, nodes, material, 3 * spacing, spacing, {});
+  const auto cut = perishell::pd::makePdBody(TEST_EXECSPACE{}, shell.mesh, nodes, material, 3 * spacing, spacing, {crack});
+  const auto host = [](const auto& view) { return Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, view); };
+  const auto uncutEnds = host(uncut.bonds.halfBonds), cutEnds = host(cut.bonds.halfBonds);
+  const auto uncutScale = host(uncut.stiffnessScale), cutScale = host(cut.stiffnessScale);
+  ASSERT_LT(cut.bonds.numBonds(), uncut.bonds.numBonds());  // the crack cut bonds
+  std::map<std::pair<LocalIndex, LocalIndex>, std::size_t> uncutIndex;
+  for (std::size_t b = 0; b < uncutEnds.extent(0); ++b)
+    uncutIndex[std::minmax(uncutEnds(b, 0), uncutEnds(b, 1))] = b;
+  double largestDifference = 0.0;
+  for (std::size_t b = 0; b < cutEnds.extent(0); ++b) {
+    const auto match = uncutIndex.find(std::minmax(cutEnds(b, 0), cutEnds(b, 1)));
+    ASSERT_NE(match, uncutIndex.end());
+    for (int m = 0; m < 2; ++m)
+      largestDifference = std::max(largestDifference, std::abs(cutScale(b, m) - uncutScale(match->second, m)));
+  }
+  EXPECT_EQ(largestDifference, 0.0);
 }
 
 TEST(TEST_CATEGORY, microbeam_rigid_rotations_give_no_force_and_rotate_deformed_forces) {
