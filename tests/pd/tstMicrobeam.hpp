@@ -434,7 +434,10 @@ TEST(TEST_CATEGORY, microbeam_pre_crack_keeps_the_uncut_stiffness_scales) {
     for (int m = 0; m < 2; ++m)
       largestDifference = std::max(largestDifference, std::abs(cutScale(b, m) - uncutScale(match->second, m)));
   }
-  EXPECT_EQ(largestDifference, 0.0);
+  // Equal up to round-off: node normals and volumes are atomic sums over elements, so two
+  // builds may differ in the last bits on a GPU (8.9e-16 seen on the H200). Fitting the
+  // weights to the cut bonds instead changes the scales near the crack far beyond that.
+  EXPECT_LT(largestDifference, 1e-13);
 }
 
 TEST(TEST_CATEGORY, microbeam_rigid_rotations_give_no_force_and_rotate_deformed_forces) {
@@ -470,6 +473,31 @@ TEST(TEST_CATEGORY, microbeam_rigid_rotations_give_no_force_and_rotate_deformed_
       EXPECT_LT(worst, 1e-9) << name;
     }
   }
+}
+
+// The frames pass (one thread per matrix entry) stores X + u and toMatrix(q), to round-off.
+TEST(TEST_CATEGORY, microbeam_node_frames_hold_positions_and_rotation_matrices) {
+  const auto plate = makePlateBody(0.2, {}, 6);
+  const auto deformed = randomDeformation(plate, 0.5, 3);  // rotations up to ~0.5 rad
+  const LocalIndex n = plate.body.numNodes();
+  perishell::pd::PdKinematics<TEST_MEMSPACE> state(n);
+  Kokkos::deep_copy(state.displacements, deformed.displacements);
+  Kokkos::deep_copy(state.rotations, deformed.rotations);
+  perishell::pd::updateNodeFrames(TEST_EXECSPACE{}, plate.body, state);
+  const auto frames = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, state.nodeFrames);
+  const auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, plate.body.referencePositions);
+  double worst = 0.0;
+  for (LocalIndex node = 0; node < n; ++node) {
+    const double q[4] = {deformed.rotations(node, 0), deformed.rotations(node, 1), deformed.rotations(node, 2),
+                         deformed.rotations(node, 3)};
+    double R[3][3];
+    perishell::rotation::toMatrix(q, R);
+    for (int k = 0; k < 3; ++k)
+      worst = std::max(worst, std::abs(frames(node, k) - (X(node, k) + deformed.displacements(node, k))));
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(frames(node, 3 + 3 * r + c) - R[r][c]));
+  }
+  EXPECT_LT(worst, 1e-15);
 }
 
 TEST(TEST_CATEGORY, microbeam_bond_scatter_and_node_gather_agree) {

@@ -238,3 +238,18 @@ TEST(TEST_CATEGORY, explicit_host_and_device_runs_agree_and_kernels_agree) {
   EXPECT_LT(hostDifference / scale, 1e-10);
   EXPECT_LT(kernelDifference / scale, 1e-10);
 }
+
+// The solver zeroes its nodal forces every step with fillContiguous (core/types.hpp): every
+// entry of a rank-2 view, and a strided view is refused rather than half filled.
+TEST(TEST_CATEGORY, explicit_force_reset_fills_every_entry_and_refuses_strided_views) {
+  perishell::pd::NodalVectorView<TEST_MEMSPACE> forces("forces", 1001);
+  Kokkos::deep_copy(forces, 7.0);
+  perishell::fillContiguous(TEST_EXECSPACE{}, forces, 0.0);
+  const auto host = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, forces);
+  double largest = 0.0;
+  for (std::size_t node = 0; node < host.extent(0); ++node)
+    for (int d = 0; d < 6; ++d) largest = std::max(largest, std::abs(host(node, d)));
+  EXPECT_EQ(largest, 0.0);
+  EXPECT_THROW(perishell::fillContiguous(TEST_EXECSPACE{}, Kokkos::subview(forces, Kokkos::ALL, 2), 1.0),
+               std::logic_error);
+}

@@ -52,6 +52,20 @@ KOKKOS_INLINE_FUNCTION void toMatrix(const double q[4], double R[3][3]) {
   R[2][2] = 1.0 - 2.0 * (x * x + y * y);
 }
 
+// Entry (r, c) of toMatrix(q), q row `row` of a quaternion view (w, x, y, z): for kernels
+// that write one matrix entry per thread.
+template <class QuaternionViewT>
+KOKKOS_INLINE_FUNCTION double matrixEntry(const QuaternionViewT& q, int row, int r, int c) {
+  if (r == c) {
+    const int a = r == 0 ? 1 : 0, b = r == 2 ? 1 : 2;  // the other two axes, ascending
+    return 1.0 - 2.0 * (q(row, 1 + a) * q(row, 1 + a) + q(row, 1 + b) * q(row, 1 + b));
+  }
+  const int k = 3 - r - c;
+  // R_rc = 2 (v_r v_c - eps_rck w v_k), eps_rck = +1 when (r, c, k) is cyclic.
+  const double sign = (c - r + 3) % 3 == 1 ? 1.0 : -1.0;
+  return 2.0 * (q(row, 1 + r) * q(row, 1 + c) - sign * q(row, 0) * q(row, 1 + k));
+}
+
 // The unit quaternion of the rotation vector theta (axis times angle).
 KOKKOS_INLINE_FUNCTION void exponential(const double theta[3], double q[4]) {
   const double angle = norm(theta);

@@ -4,6 +4,7 @@
 #include <Kokkos_Core.hpp>
 
 #include <cstdint>
+#include <stdexcept>
 #include <type_traits>
 
 namespace perishell {
@@ -39,5 +40,29 @@ enum class TangentForm { Exact, Symmetric };
 
 template <class ExecutionSpaceT>
 inline constexpr bool is_execution_space_v = Kokkos::is_execution_space<ExecutionSpaceT>::value;
+
+// The range policy of the kernels every explicit step launches. Kokkos 3.4 puts a functor
+// above 512 bytes (ours capture a body's views) in CUDA constant memory and then makes the
+// host wait for the previous such kernel to finish before it launches the next, so the GPU
+// idles between a step's kernels; the light-weight hint passes the functor as a kernel
+// argument (up to 4 kB) and the launches queue. Host backends ignore the hint.
+template <class ExecutionSpaceT, class IndexT>
+auto queuedRangePolicy(const ExecutionSpaceT& space, IndexT begin, IndexT end) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  return Kokkos::Experimental::require(Kokkos::RangePolicy<ExecutionSpaceT>(space, begin, end),
+                                       Kokkos::Experimental::WorkItemProperty::HintLightWeight);
+}
+
+// Sets every entry of a contiguous view to `value` as one flat range. Kokkos 3.4 fills a
+// rank-2 view with an MDRange kernel: 309 us for the 1e6 x 6 nodal forces on the H200
+// (ncu), 11 % of an explicit step; the flat fill takes 60 us.
+template <class ExecutionSpaceT, class ViewT>
+void fillContiguous(const ExecutionSpaceT& space, const ViewT& view, typename ViewT::non_const_value_type value) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  if (!view.span_is_contiguous()) throw std::logic_error("fillContiguous: the view is not contiguous");
+  using Flat = Kokkos::View<typename ViewT::non_const_value_type*, typename ViewT::memory_space,
+                            Kokkos::MemoryTraits<Kokkos::Unmanaged>>;
+  Kokkos::deep_copy(space, Flat(view.data(), view.span()), value);
+}
 
 }  // namespace perishell

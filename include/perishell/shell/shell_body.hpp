@@ -117,7 +117,7 @@ void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpa
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   const bool withEnergy = energy.extent(0) > 0;
   Kokkos::parallel_for(
-      "perishell::shell::subtractShellForces", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numElements()),
+      "perishell::shell::subtractShellForces", queuedRangePolicy(space, 0, body.numElements()),
       KOKKOS_LAMBDA(const LocalIndex e) {
         double reference[4][3], current[4][3], rotations[4][3][3], localStiffness[24][24], force[24];
         detail::loadElement(body, state, e, reference, current, rotations);

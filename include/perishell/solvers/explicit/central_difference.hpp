@@ -138,7 +138,7 @@ class CentralDifferenceSolver {
   // The energies between steps (one extra force evaluation into scratch outputs, so no
   // state changes and no bond is counted as breaking twice); kinetic from v_{n-1/2}.
   EnergyReport energies() {
-    Kokkos::deep_copy(space_, forces_, 0.0);
+    fillContiguous(space_, forces_, 0.0);
     Kokkos::deep_copy(space_, strainEnergy_, 0.0);
     if (discardedFracture_.extent(0) == 0) {
       discardedFracture_ = VectorView<MemorySpace>("pd fracture energy scratch", body_.numNodes());
@@ -248,7 +248,7 @@ class CentralDifferenceSolver {
   }
 
   void computeForces(bool withStrainEnergy) {
-    Kokkos::deep_copy(space_, forces_, 0.0);
+    fillContiguous(space_, forces_, 0.0);
     if (withStrainEnergy) Kokkos::deep_copy(space_, strainEnergy_, 0.0);
     const pd::BondForceOutputs<MemorySpace> outputs{
         forces_, withStrainEnergy ? strainEnergy_ : VectorView<MemorySpace>(), fractureEnergy_, intactNext_};
@@ -284,8 +284,8 @@ class CentralDifferenceSolver {
     const auto externalWork = externalWork_, supportWork = supportWork_, dampingWork = dampingWork_;
     const auto kinetic = kineticEnergy_;
     Kokkos::parallel_for(
-        "perishell::solvers::CentralDifferenceSolver::advance",
-        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, body_.numNodes()), KOKKOS_LAMBDA(const LocalIndex node) {
+        "perishell::solvers::CentralDifferenceSolver::advance", queuedRangePolicy(space_, 0, body_.numNodes()),
+        KOKKOS_LAMBDA(const LocalIndex node) {
           double external = 0.0, support = 0.0, dissipated = 0.0, kineticNode = 0.0;
           double newVelocity[6];
           for (int d = 0; d < 6; ++d) {
@@ -444,7 +444,7 @@ class CentralDifferenceSolver {
             rotation::rotateBySpatialIncrement(spin, q);
             for (int k = 0; k < 4; ++k) trial.rotations(node, k) = q[k];
           });
-      Kokkos::deep_copy(space_, trialForces, 0.0);
+      fillContiguous(space_, trialForces, 0.0);
       const pd::BondForceOutputs<MemorySpace> outputs{trialForces, VectorView<MemorySpace>(), scratchEnergy, scratchIntact};
       addInternalForces(trial, outputs);
       // product = M^-1/2 K M^-1/2 direction = -M^-1/2 f / epsilon; Rayleigh quotient and next direction.
