@@ -39,31 +39,24 @@ KOKKOS_INLINE_FUNCTION void apply(const T R[3][3], const T a[3], T out[3]) {
 }
 
 // Quaternions are (w, x, y, z) with w the scalar part.
-KOKKOS_INLINE_FUNCTION void toMatrix(const double q[4], double R[3][3]) {
-  const double w = q[0], x = q[1], y = q[2], z = q[3];
-  R[0][0] = 1.0 - 2.0 * (y * y + z * z);
-  R[0][1] = 2.0 * (x * y - w * z);
-  R[0][2] = 2.0 * (x * z + w * y);
-  R[1][0] = 2.0 * (x * y + w * z);
-  R[1][1] = 1.0 - 2.0 * (x * x + z * z);
-  R[1][2] = 2.0 * (y * z - w * x);
-  R[2][0] = 2.0 * (x * z - w * y);
-  R[2][1] = 2.0 * (y * z + w * x);
-  R[2][2] = 1.0 - 2.0 * (x * x + y * y);
-}
-
-// Entry (r, c) of toMatrix(q), q row `row` of a quaternion view (w, x, y, z): for kernels
-// that write one matrix entry per thread.
-template <class QuaternionViewT>
-KOKKOS_INLINE_FUNCTION double matrixEntry(const QuaternionViewT& q, int row, int r, int c) {
+// Entry (r, c) of the rotation matrix of the unit quaternion whose component k is q(k):
+// 1 - 2 (v_a^2 + v_b^2) on the diagonal (a, b the other two axes), 2 (v_r v_c - eps_rck w v_k)
+// off it. toMatrix takes all nine; kernels that write one entry per thread take one.
+template <class ComponentT>
+KOKKOS_INLINE_FUNCTION double matrixEntry(const ComponentT& q, int r, int c) {
   if (r == c) {
-    const int a = r == 0 ? 1 : 0, b = r == 2 ? 1 : 2;  // the other two axes, ascending
-    return 1.0 - 2.0 * (q(row, 1 + a) * q(row, 1 + a) + q(row, 1 + b) * q(row, 1 + b));
+    const int a = r == 0 ? 1 : 0, b = r == 2 ? 1 : 2;
+    return 1.0 - 2.0 * (q(1 + a) * q(1 + a) + q(1 + b) * q(1 + b));
   }
   const int k = 3 - r - c;
-  // R_rc = 2 (v_r v_c - eps_rck w v_k), eps_rck = +1 when (r, c, k) is cyclic.
-  const double sign = (c - r + 3) % 3 == 1 ? 1.0 : -1.0;
-  return 2.0 * (q(row, 1 + r) * q(row, 1 + c) - sign * q(row, 0) * q(row, 1 + k));
+  const double sign = (c - r + 3) % 3 == 1 ? 1.0 : -1.0;  // eps_rck: +1 when (r, c, k) is cyclic
+  return 2.0 * (q(1 + r) * q(1 + c) - sign * q(0) * q(1 + k));
+}
+
+KOKKOS_INLINE_FUNCTION void toMatrix(const double q[4], double R[3][3]) {
+  const auto component = [q](int k) { return q[k]; };
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) R[r][c] = matrixEntry(component, r, c);
 }
 
 // The unit quaternion of the rotation vector theta (axis times angle).

@@ -96,7 +96,8 @@ void updateNodeFrames(const ExecutionSpaceT& space, const PdBody<MemorySpaceT>& 
         const int entry = static_cast<int>(index % entriesPerNode);
         state.nodeFrames(node, entry) =
             entry < 3 ? body.referencePositions(node, entry) + state.displacements(node, entry)
-                      : rotation::matrixEntry(state.rotations, node, (entry - 3) / 3, (entry - 3) % 3);
+                      : rotation::matrixEntry([&](int k) { return state.rotations(node, k); }, (entry - 3) / 3,
+                                               (entry - 3) % 3);
       });
 }
 
