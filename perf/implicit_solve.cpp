@@ -13,7 +13,9 @@
 //
 // Usage: perishell_perf_implicit_solve [--csv] [--repeats R] [--preconditioner NAME]
 //                                      [--models ccm,pd] [--newton N] [spacing_mm...]
-//   defaults: 5 repeats, preconditioner amg, models ccm and pd, spacings 0.5 0.25 0.1 mm
+//   defaults: 5 repeats, preconditioner amg, models ccm and pd, spacings 0.5 0.25 0.1 mm; with
+//   cholesky or direct the increment ends with a factorization of its converged tangent (the
+//   stability check, counted in setup per solve)
 //   OpenMP: OMP_NUM_THREADS=2 OMP_PROC_BIND=false ./perishell_perf_implicit_solve 1 0.5
 #include <perishell/io/deck.hpp>
 #include <perishell/solvers/implicit/static_solver_from_model.hpp>
@@ -41,7 +43,7 @@ struct Options {
 
 [[noreturn]] void usage(const char* program, const std::string& problem) {
   std::fprintf(stderr,
-               "error: %s\nusage: %s [--csv] [--repeats R] [--preconditioner none|jacobi|block-jacobi|amg] "
+               "error: %s\nusage: %s [--csv] [--repeats R] [--preconditioner jacobi|block-jacobi|amg|cholesky|direct|auto] "
                "[--models ccm,pd] [--newton N] [spacing_mm...]\n",
                problem.c_str(), program);
   std::exit(2);

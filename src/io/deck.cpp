@@ -684,7 +684,8 @@ deck::Solver readSolver(const Section& section) {
   using deck::SolverType;
   const std::vector<std::string> explicitKeys{"type", "end-time", "steps", "dt", "safety-factor", "damping"};
   const std::vector<std::string> implicitKeys{"type", "increments", "max-iterations", "tolerance",
-                                              "preconditioner", "max-cuts", "tangent", "amg-reuse"};
+                                              "preconditioner", "max-cuts", "tangent", "amg-reuse",
+                                              "line-search", "control", "max-increments"};
   std::vector<std::string> allKeys = explicitKeys;
   allKeys.insert(allKeys.end(), implicitKeys.begin() + 1, implicitKeys.end());
   section.allowOnly(allKeys);
@@ -732,7 +733,10 @@ deck::Solver readSolver(const Section& section) {
         "preconditioner",
         {{"jacobi", deck::Preconditioner::Jacobi},
          {"block-jacobi", deck::Preconditioner::BlockJacobi},
-         {"amg", deck::Preconditioner::Amg}},
+         {"amg", deck::Preconditioner::Amg},
+         {"cholesky", deck::Preconditioner::Cholesky},
+         {"direct", deck::Preconditioner::Direct},
+         {"auto", deck::Preconditioner::Auto}},
         settings.preconditioner);
     settings.tangent = section.choice<deck::Tangent>(
         "tangent",
@@ -744,6 +748,14 @@ deck::Solver readSolver(const Section& section) {
         section.fail("max-cuts", "must be a whole number in [0, 30], got " + formatNumber(cuts));
       settings.maxCuts = int(cuts);
     }
+    settings.lineSearch = section.flag("line-search", settings.lineSearch);
+    using Control = deck::ImplicitSettings::Control;
+    settings.control = section.choice<Control>("control", {{"load", Control::Load}, {"arc-length", Control::ArcLength}},
+                                               settings.control);
+    settings.maxIncrements = count("max-increments", 10 * settings.increments);
+    if (section.has("max-increments") && settings.control != Control::ArcLength)
+      section.fail("max-increments", "applies to control: arc-length only (under load control the run takes "
+                                     "exactly `increments` increments)");
     settings.amgReuse = section.number("amg-reuse", settings.amgReuse);
     if (!(settings.amgReuse == 0.0 || (settings.amgReuse >= 1.0 && settings.amgReuse <= 100.0)))
       section.fail("amg-reuse", "must be 0 (rebuild the multigrid hierarchy at every Newton iteration) or a growth "

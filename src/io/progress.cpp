@@ -24,6 +24,12 @@ ProgressReporter::ProgressReporter(long long totalSteps, std::ostream& out, doub
 double ProgressReporter::elapsedSeconds() const { return clock_() - start_; }
 
 bool ProgressReporter::update(long long step, double simulatedTime) {
+  char time[48];
+  std::snprintf(time, sizeof time, "t = %.6e s", simulatedTime);
+  return update(step, std::string(time));
+}
+
+bool ProgressReporter::update(long long step, const std::string& state) {
   if (step < 1 || step > totalSteps_)
     throw std::out_of_range("progress: step " + std::to_string(step) + " outside 1.." + std::to_string(totalSteps_));
   const double now = clock_();
@@ -33,10 +39,10 @@ bool ProgressReporter::update(long long step, double simulatedTime) {
   // The remaining steps at the mean rate so far: steady for explicit runs, a rough guide
   // for Newton increments of varying cost.
   const double remaining = elapsed * double(totalSteps_ - step) / double(step);
-  char line[256];
-  std::snprintf(line, sizeof line, "step %lld/%lld (%5.1f %%)  t = %.6e s  elapsed %s  ETA %s\n", step,
-                totalSteps_, 100.0 * double(step) / double(totalSteps_), simulatedTime,
-                formatDuration(elapsed).c_str(), formatDuration(remaining).c_str());
+  char line[512];
+  std::snprintf(line, sizeof line, "step %lld/%lld (%5.1f %%)  %s  elapsed %s  ETA %s\n", step, totalSteps_,
+                100.0 * double(step) / double(totalSteps_), state.c_str(), formatDuration(elapsed).c_str(),
+                formatDuration(remaining).c_str());
   out_ << line << std::flush;
   lastPrint_ = now;
   printed_ = true;

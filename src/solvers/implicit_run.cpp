@@ -136,8 +136,20 @@ const char* preconditionerName(deck::Preconditioner preconditioner) {
     case deck::Preconditioner::Jacobi: return "Jacobi";
     case deck::Preconditioner::BlockJacobi: return "6x6 block-Jacobi";
     case deck::Preconditioner::Amg: return "smoothed-aggregation AMG";
+    case deck::Preconditioner::Cholesky: return "sparse Cholesky (CHOLMOD)";
+    case deck::Preconditioner::Direct: return "direct (Cholesky per iteration)";
+    case deck::Preconditioner::Auto: return "auto";
   }
   return "?";
+}
+
+// The progress line of a static increment: where the load is and what it took.
+std::string incrementState(const IncrementReport& report) {
+  std::ostringstream text;
+  text << "load factor " << formatNumber(report.loadFactor, 6) << "  Newton " << report.newtonIterations << "  Krylov "
+       << report.linearIterations << "  cuts " << report.cuts;
+  if (report.factorizations > 0) text << "  factorizations " << report.factorizations;
+  return text.str();
 }
 
 template <class ExecutionSpaceT>
@@ -145,14 +157,26 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
                                  std::ostream& log) {
   using Clock = std::chrono::steady_clock;
   const auto& deck = model.deck;
-  const int deckIncrements = deck.solver.implicitSettings.increments;
+  const auto& settings = deck.solver.implicitSettings;
+  const bool arcLength = settings.control == deck::ImplicitSettings::Control::ArcLength;
+  // Under arc-length control the run ends at load factor 1; maxIncrements bounds it.
+  const int deckIncrements = arcLength ? settings.maxIncrements : settings.increments;
   const int increments = static_cast<int>(std::min<long long>(deckIncrements, runOptions.maxSteps.value_or(deckIncrements)));
   const auto setupStart = Clock::now();
   auto solver = makeStaticSolver(space, model);
+  if (arcLength) {
+    const std::string obstacle = solver.arcLengthObstacle();
+    if (!obstacle.empty())
+      throw std::invalid_argument(deck.sourceName + ": solver.control: arc-length scales every load and prescribed "
+                                  "value by the one load factor it solves for, but " + obstacle +
+                                  "; use control: load, or remove the curve / prescribed value");
+  }
   const double setupSeconds = fencedSecondsSince(space, setupStart);
   log << "implicit: " << solver.numElements() << " shell elements, " << solver.numBonds() << " bonds on "
       << ExecutionSpaceT::name() << "; " << model.freeDofCount() << " free DOF, " << solver.numMatrixEntries()
-      << " tangent entries; " << deckIncrements << " increments; setup " << formatNumber(setupSeconds) << " s\n";
+      << " tangent entries; "
+      << (arcLength ? "arc-length control to load factor 1, at most " : "") << deckIncrements
+      << " increments; setup " << formatNumber(setupSeconds) << " s\n";
   if (increments < deckIncrements)
     log << "implicit: stopping after " << increments << " of the deck's " << deckIncrements
         << " increments (--max-steps)\n";
@@ -164,19 +188,45 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   ImplicitOutput<ExecutionSpaceT> output(model, directory, solver);
   output.writeFields();
   double outputSeconds = fencedSecondsSince(space, outputStart);
-  io::ProgressReporter progress(increments, log);
+  // Every increment prints: static increments are few and each one's iterations matter.
+  io::ProgressReporter progress(increments, log, 0.0);
+  const char* initialPreconditioner = preconditionerName(solver.activePreconditioner());
+  log << "implicit: linear solver: " << initialPreconditioner << " preconditioned "
+      << (solver.tangentForm() == TangentForm::Exact ? "GMRES (exact tangent)" : "CG") << "\n";
+  bool limitPointReported = false, snapReported = false;
   ImplicitRunSummary summary;
   PhaseSeconds phases;
+  int taken = 0;
   for (int increment = 1; increment <= increments; ++increment) {
     IncrementReport report;
     try {
-      report = solver.advanceTo(double(increment) / deckIncrements);
+      report = arcLength ? solver.advanceByArcLength() : solver.advanceTo(double(increment) / deckIncrements);
     } catch (const NewtonFailure& failure) {
       output.writeFields();
       throw NewtonFailure("increment " + std::to_string(increment) + " of " + std::to_string(deckIncrements) + ": " +
                           failure.what() + "; the last converged state (load factor " +
                           formatNumber(solver.loadFactor()) + ") is in " + output.xdmfPath());
     }
+    for (const auto& note : report.notes) log << "implicit: increment " << increment << ": " << note << "\n";
+    if (report.negativePivots > 0 && !limitPointReported) {
+      log << "implicit: warning: increment " << increment << ": the tangent has " << report.negativePivots
+          << " negative pivot(s) at load factor " << formatNumber(solver.loadFactor(), 6)
+          << ": a limit or bifurcation point has been reached or passed"
+          << (arcLength ? " (arc-length control follows the path on)"
+                        : ". Load control cannot follow a load path that falls past a limit point; results beyond it "
+                          "may be off the equilibrium path (solver.control: arc-length follows it)")
+          << ".\n";
+      limitPointReported = true;
+    }
+    if (report.passedUnstableState && !arcLength && !snapReported) {
+      log << "implicit: warning: increment " << increment << " (load factor " << formatNumber(solver.loadFactor(), 6)
+          << ") passed through unstable states to a stable one: the model snapped past a limit point, and the path "
+             "in between was not followed (solver.control: arc-length follows it).\n";
+      snapReported = true;
+    }
+    summary.negativePivots = std::max(summary.negativePivots, report.negativePivots);
+    summary.factorizations += report.factorizations;
+    summary.lineSearches += report.lineSearches;
     summary.cuts += report.cuts;
     phases.residual += report.seconds.residual;
     phases.assembly += report.seconds.assembly;
@@ -187,15 +237,20 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
     summary.newtonIterations += report.newtonIterations;
     summary.linearIterations += report.linearIterations;
     summary.preconditionerBuilds += report.preconditionerBuilds;
-    const bool last = increment == increments;
+    taken = increment;
+    const bool last = increment == increments || (arcLength && solver.loadFactor() >= 1.0);
     outputStart = Clock::now();
     if (last || increment % deck.output.historyEvery == 0)
       summary.maxDisplacement = output.appendHistory(increment, report);
     if (last || (deck.output.every > 0 && increment % deck.output.every == 0)) output.writeFields();
     outputSeconds += std::chrono::duration<double>(Clock::now() - outputStart).count();
-    progress.update(increment, solver.loadFactor());
+    progress.update(last ? increments : increment, incrementState(report));
+    if (last) break;
   }
-  summary.increments = increments;
+  summary.increments = taken;
+  if (arcLength && solver.loadFactor() < 1.0)
+    log << "implicit: warning: arc-length control stopped at load factor " << formatNumber(solver.loadFactor(), 6)
+        << " after " << taken << " increments (solver.max-increments)\n";
   summary.wallSeconds = std::chrono::duration<double>(Clock::now() - runStart).count();
   summary.xdmfPath = output.xdmfPath();
   summary.historyPath = output.historyPath();
@@ -211,12 +266,18 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   summary.timingsPath = writePhaseTimes(directory, summary.phases);
   io::SummaryTable("implicit run summary")
       .add("backend", ExecutionSpaceT::name())
-      .add("increments", std::to_string(increments) +
-                             (increments < deckIncrements ? " of " + std::to_string(deckIncrements) : std::string()) +
+      .add("increments", std::to_string(taken) +
+                             (!arcLength && increments < deckIncrements ? " of " + std::to_string(deckIncrements)
+                                                                        : std::string()) +
                              " (" + std::to_string(summary.cuts) + " cuts)")
-      .add("Newton iterations", std::to_string(summary.newtonIterations))
+      .add("load factor", formatNumber(solver.loadFactor(), 6) + (arcLength ? " (arc-length control)" : ""))
+      .add("Newton iterations", std::to_string(summary.newtonIterations) + " (" +
+                                    std::to_string(summary.lineSearches) + " shortened by the line search)")
       .add("linear iterations", std::to_string(summary.linearIterations) + " (" +
-                                    preconditionerName(deck.solver.implicitSettings.preconditioner) + " PCG)")
+                                    preconditionerName(solver.activePreconditioner()) + ")")
+      .add("tangent", summary.negativePivots > 0 ? "lost positive definiteness (up to " +
+                                                       std::to_string(summary.negativePivots) + " negative pivots)"
+                                                 : std::string(summary.factorizations > 0 ? "positive definite" : "-"))
       .add("max displacement", formatNumber(summary.maxDisplacement, 6) + " m")
       .add("wall time", io::formatDuration(summary.wallSeconds))
       .add("  internal forces", formatNumber(phases.residual) + " s")
@@ -225,6 +286,9 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
       .add("  preconditioner", formatNumber(phases.preconditioner) + " s" +
                                    (summary.preconditionerBuilds > 0
                                         ? " (" + std::to_string(summary.preconditionerBuilds) + " AMG builds)"
+                                        : std::string()) +
+                                   (summary.factorizations > 0
+                                        ? " (" + std::to_string(summary.factorizations) + " factorizations)"
                                         : std::string()))
       .add("  linear solve", formatNumber(phases.linearSolve) + " s")
       .add("  update", formatNumber(phases.update) + " s")

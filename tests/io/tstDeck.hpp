@@ -407,7 +407,7 @@ TEST(TEST_CATEGORY, deck_defaults_fill_what_a_minimal_deck_leaves_out) {
   EXPECT_EQ(implicitSettings.increments, 1);
   EXPECT_EQ(implicitSettings.maxIterations, 100);
   EXPECT_DOUBLE_EQ(implicitSettings.tolerance, 1e-8);
-  EXPECT_EQ(implicitSettings.preconditioner, deck::Preconditioner::Amg);
+  EXPECT_EQ(implicitSettings.preconditioner, deck::Preconditioner::Auto);
   EXPECT_EQ(implicitSettings.tangent, deck::Tangent::Auto);
   EXPECT_DOUBLE_EQ(implicitSettings.amgReuse, 1.5);
   EXPECT_TRUE(implicitDeck.warnings.empty());

@@ -6,6 +6,9 @@
 #include <perishell/solvers/implicit/static_solver_from_model.hpp>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -201,9 +204,11 @@ TEST(TEST_CATEGORY, static_newton_cuts_an_increment_too_large_and_recovers) {
   EXPECT_NEAR(tip[2], 6.698, 0.02 * 6.698);
 }
 
-TEST(TEST_CATEGORY, static_newton_reports_a_mechanism) {
-  using namespace perishell_test_static_newton;
-  // Only w is held at the clamp: the strip is free to slide and spin in its plane.
+namespace perishell_test_static_newton {
+
+// Only w is held at the clamp: the strip is free to slide and spin in its plane. Returns the
+// NewtonFailure's message.
+std::string mechanismMessage(const std::string& preconditioner) {
   const std::string text = R"(perishell:
   version: 1
   mesh: {generator: plate, length-x: 4.0, length-y: 1.0, spacing: 0.5}
@@ -211,17 +216,29 @@ TEST(TEST_CATEGORY, static_newton_reports_a_mechanism) {
   zones: {default: ccm}
   supports: {clamp: {set: left, dofs: [uz]}}
   loads: {pull: {type: edge-traction, set: right, vector: [40.0, 0.0, 0.0]}}
-  solver: {type: implicit, increments: 1, max-cuts: 2}
+  solver: {type: implicit, increments: 1, max-cuts: 2, preconditioner: )" + preconditioner + R"(}
 )";
   const auto model = perishell::model::buildModel(perishell::parseDeck(text, "mechanism.yaml"));
   auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
   try {
     solver.advanceTo(1.0);
-    FAIL() << "a strip free to slide converged";
   } catch (const perishell::solvers::NewtonFailure& failure) {
-    const std::string message = failure.what();
-    EXPECT_NE(message.find("singular"), std::string::npos) << message;
-    EXPECT_NE(message.find("supports"), std::string::npos) << message;
+    return failure.what();
+  }
+  return "";
+}
+
+}  // namespace perishell_test_static_newton
+
+TEST(TEST_CATEGORY, static_newton_reports_a_mechanism) {
+  using namespace perishell_test_static_newton;
+  for (const std::string preconditioner : {"amg", "cholesky"}) {
+    const std::string message = mechanismMessage(preconditioner);
+    EXPECT_NE(message.find("singular"), std::string::npos) << preconditioner << ": " << message;
+    EXPECT_NE(message.find("check the supports"), std::string::npos) << preconditioner << ": " << message;
+    // The factorization names where the null space showed.
+    if (preconditioner == "cholesky")
+      EXPECT_NE(message.find("a pivot vanished at DOF"), std::string::npos) << message;
   }
 }
 
@@ -353,4 +370,238 @@ TEST(TEST_CATEGORY, static_newton_pressed_plate_agrees_across_pd_ratios) {
   EXPECT_GT(ccm, 0.05);  // large deformation: the 90 mm plate deflects by about 0.11 m
   EXPECT_NEAR(half / ccm, 1.0, 0.03);
   EXPECT_NEAR(pd / ccm, 1.0, 0.03);
+}
+
+namespace perishell_test_static_newton {
+
+struct RunTotals {
+  int newtonIterations = 0, factorizations = 0, cuts = 0;
+  long long linearIterations = 0;
+  double tipW = 0.0, worstError = 0.0;
+};
+
+// Sze 3.1 CCM through its table with the given preconditioner; totals over the levels.
+RunTotals sze31With(const std::string& preconditioner) {
+  const auto model = stripModel("ccm", 0.5, 10.0, endShear,
+                                "increments: 20, max-iterations: 60, tolerance: 1.0e-9, preconditioner: " +
+                                    preconditioner);
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  RunTotals totals;
+  for (const auto& level : sze31) {
+    const auto report = solver.advanceTo(level.loadFactor);
+    totals.newtonIterations += report.newtonIterations;
+    totals.linearIterations += report.linearIterations;
+    totals.factorizations += report.factorizations;
+    totals.cuts += report.cuts;
+    const auto tip = meanDisplacement(solver, model, "right");
+    totals.tipW = tip[2];
+    totals.worstError =
+        std::max(totals.worstError, std::max(std::abs(-tip[0] - level.minusU), std::abs(tip[2] - level.w)) / 6.698);
+  }
+  std::printf("Sze 3.1 CCM, %-12s: worst %.3f %%, w_tip %.9f, %d Newton, %lld Krylov, %d factorizations, %d cuts\n",
+              preconditioner.c_str(), 100.0 * totals.worstError, totals.tipW, totals.newtonIterations,
+              totals.linearIterations, totals.factorizations, totals.cuts);
+  return totals;
+}
+
+}  // namespace perishell_test_static_newton
+
+TEST(TEST_CATEGORY, static_newton_every_preconditioner_follows_the_sze_cantilever) {
+  using namespace perishell_test_static_newton;
+  const RunTotals amg = sze31With("amg");
+  for (const std::string preconditioner : {"amg", "cholesky", "direct"}) {
+    const RunTotals run = preconditioner == "amg" ? amg : sze31With(preconditioner);
+    EXPECT_LT(run.worstError, 0.02) << preconditioner;
+    EXPECT_NEAR(run.tipW, amg.tipW, 1e-6 * amg.tipW) << preconditioner;
+    if (preconditioner == "direct") {
+      // A fresh factor at every Newton iteration: PCG converges at once.
+      EXPECT_EQ(run.factorizations, run.newtonIterations + 11) << "one per iteration and one per level's end";
+      EXPECT_LE(run.linearIterations, 2 * run.newtonIterations);
+    }
+    if (preconditioner == "cholesky") {
+      // Reused across iterations and levels, yet few Krylov iterations per solve.
+      EXPECT_LT(run.factorizations, run.newtonIterations + 11);
+      EXPECT_LE(double(run.linearIterations) / run.newtonIterations, 10.0);
+    }
+  }
+}
+
+// A cantilever strip under axial compression stays straight under load control whatever the
+// load; past Euler's load P_cr = pi^2 E I / (4 L^2) that equilibrium is unstable, and the
+// factorization of its tangent shows it: no negative pivot below P_cr, one above (the next
+// mode buckles at 9 P_cr).
+TEST(TEST_CATEGORY, static_newton_reports_the_instability_of_a_column_past_its_buckling_load) {
+  using namespace perishell_test_static_newton;
+  const double pi = 3.14159265358979323846;
+  const double criticalLoad = pi * pi * 1.2e6 * (1.0 * 0.001 / 12.0) / (4.0 * 10.0 * 10.0);  // 2.467
+  const double traction = 1.2 * criticalLoad / 0.1;  // 1.2 P_cr over the 1 x 0.1 end section
+  for (const std::string preconditioner : {"cholesky", "direct"}) {
+    const auto model = stripModel("ccm", 0.5, 10.0,
+                                  "{type: edge-traction, set: right, vector: [" + std::to_string(-traction) + ", 0.0, 0.0]}",
+                                  "increments: 4, tolerance: 1.0e-9, preconditioner: " + preconditioner);
+    auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+    for (const double fraction : {0.25, 0.5, 0.75, 1.0}) {  // 0.3, 0.6, 0.9 and 1.2 P_cr
+      const auto report = solver.advanceTo(fraction);
+      const auto tip = meanDisplacement(solver, model, "right");
+      std::printf("%s: P/P_cr %.2f: %ld negative pivots, tip u %.6f w %.2e\n", preconditioner.c_str(), 1.2 * fraction,
+                  report.negativePivots, tip[0], tip[2]);
+      EXPECT_EQ(report.negativePivots, fraction < 1.0 ? 0 : 1) << preconditioner << " at " << 1.2 * fraction << " P_cr";
+      EXPECT_LT(std::abs(tip[2]), 1e-8);  // straight
+    }
+  }
+}
+
+
+namespace perishell_test_static_newton {
+
+// Sze, Liu & Lo (2004) §3.8 (our issues call it Sze 3.5), the hinged cylindrical roof: R 2540,
+// half length 254, half angle 0.1 rad, h 12.7, E 3102.75, nu 0.3, straight edges hinged,
+// curved edges free, P_max 3000 at the centre. Quarter model (n x n quads, symmetry on x = 0
+// and y = 0, P/4 at the centre), written as a Gmsh file.
+perishell::model::Model hingedRoof(int n, const std::string& solver) {
+  const double pi = 3.14159265358979323846;
+  (void)pi;
+  auto node = [n](int i, int j) { return 1 + j * (n + 1) + i; };
+  std::ostringstream msh;
+  msh << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n5\n1 1 \"hinged\"\n1 2 \"x0\"\n1 3 \"y0\"\n"
+         "0 4 \"centre\"\n2 5 \"roof\"\n$EndPhysicalNames\n$Entities\n1 3 1 0\n4 0 0 0 1 4\n"
+         "1 0 0 0 0 0 0 1 1 0\n2 0 0 0 0 0 0 1 2 0\n3 0 0 0 0 0 0 1 3 0\n1 0 0 0 0 0 0 1 5 0\n$EndEntities\n";
+  const int numNodes = (n + 1) * (n + 1);
+  msh << "$Nodes\n1 " << numNodes << " 1 " << numNodes << "\n2 1 0 " << numNodes << "\n";
+  for (int k = 1; k <= numNodes; ++k) msh << k << "\n";
+  msh.precision(17);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const double a = double(i) / n, b = double(j) / n;
+      msh << 254.0 * a << " " << 2540.0 * std::sin(0.1 * b) << " "
+          << 2540.0 * (std::cos(0.1 * b) - std::cos(0.1)) << "\n";
+    }
+  msh << "$EndNodes\n$Elements\n5 " << 1 + 3 * n + n * n << " 1 " << 1 + 3 * n + n * n << "\n";
+  int tag = 1;
+  msh << "0 4 15 1\n" << tag++ << " " << node(0, 0) << "\n";
+  auto edge = [&](int entity, auto endpoints) {
+    msh << "1 " << entity << " 1 " << n << "\n";
+    for (int k = 0; k < n; ++k) {
+      const auto [a, b] = endpoints(k);
+      msh << tag++ << " " << a << " " << b << "\n";
+    }
+  };
+  edge(1, [&](int k) { return std::pair{node(k, n), node(k + 1, n)}; });  // straight edge: hinged
+  edge(2, [&](int k) { return std::pair{node(0, k), node(0, k + 1)}; });  // x = 0: symmetry
+  edge(3, [&](int k) { return std::pair{node(k, 0), node(k + 1, 0)}; });  // y = 0 (crown): symmetry
+  msh << "2 1 3 " << n * n << "\n";
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      msh << tag++ << " " << node(i, j) << " " << node(i + 1, j) << " " << node(i + 1, j + 1) << " " << node(i, j + 1)
+          << "\n";
+  msh << "$EndElements\n";
+  const auto directory = std::filesystem::temp_directory_path() / "perishell_test_hinged_roof";
+  std::filesystem::create_directories(directory);
+  const auto mesh = directory / ("roof" + std::to_string(n) + ".msh");
+  std::ofstream(mesh) << msh.str();
+  const std::string text = R"(perishell:
+  version: 1
+  mesh: {generator: gmsh, file: )" + mesh.string() + R"(, spacing: )" + std::to_string(254.0 / n) + R"(}
+  material: {young-modulus: 3102.75, poisson-ratio: 0.3, density: 1.0, thickness: 12.7}
+  zones: {default: ccm}
+  supports:
+    hinge: {set: hinged, dofs: [ux, uy, uz]}
+    symmetryX: {set: x0, dofs: [ux, ry, rz]}
+    symmetryY: {set: y0, dofs: [uy, rx, rz]}
+  loads: {centre: {type: point-force, set: centre, vector: [0.0, 0.0, -750.0]}}
+  solver: {type: implicit, )" + solver + R"(}
+)";
+  return perishell::model::buildModel(perishell::parseDeck(text, "roof.yaml"));
+}
+
+// Sze (2004) Table 9a, h = 12.7: P/P_max against the centre deflection -W_C (transcribed in
+// MBDyn's tests/plates/sze2004/sze38/sze38_ref_a.dat); -W_C rises monotonically along the path.
+const std::vector<std::array<double, 2>> roofReference = {
+    {0.0000, 0.000},  {0.0877, 0.693},  {0.1980, 1.638},  {0.3473, 3.087},  {0.4686, 4.477},  {0.5647, 5.802},
+    {0.6381, 7.057},  {0.6908, 8.237},  {0.7246, 9.339},  {0.7412, 10.358}, {0.7421, 11.293}, {0.7286, 12.141},
+    {0.7023, 12.903}, {0.6649, 13.583}, {0.6182, 14.188}, {0.5643, 14.728}, {0.5055, 15.217}, {0.4442, 15.676},
+    {0.3830, 16.125}, {0.3245, 16.590}, {0.2717, 17.094}, {0.2272, 17.657}, {0.1940, 18.299}, {0.1750, 19.028},
+    {0.1729, 19.852}, {0.1905, 20.771}, {0.2303, 21.780}, {0.2950, 22.875}, {0.3871, 24.049}, {0.4443, 24.663},
+    {0.5093, 25.293}, {0.5826, 25.940}, {0.6644, 26.601}, {0.7551, 27.276}, {0.8549, 27.964}, {0.9643, 28.663},
+    {1.0835, 29.374}};
+
+double roofReferenceLoad(double deflection) {
+  for (std::size_t k = 1; k < roofReference.size(); ++k)
+    if (deflection <= roofReference[k][1]) {
+      const auto& [l0, w0] = roofReference[k - 1];
+      const auto& [l1, w1] = roofReference[k];
+      return l0 + (deflection - w0) / (w1 - w0) * (l1 - l0);
+    }
+  return std::nan("");
+}
+
+}  // namespace perishell_test_static_newton
+
+TEST(TEST_CATEGORY, static_newton_arc_length_follows_the_hinged_roof_through_both_limit_points) {
+  using namespace perishell_test_static_newton;
+  const auto model = hingedRoof(8, "increments: 20, control: arc-length, preconditioner: cholesky");
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  EXPECT_TRUE(solver.arcLengthObstacle().empty());
+  double worst = 0.0, peak = 0.0, valley = 1.0;
+  int increments = 0;
+  bool unstableSeen = false, unstableBeforePeak = false;
+  while (solver.loadFactor() < 1.0 && increments < 200) {
+    const auto report = solver.advanceByArcLength();
+    ++increments;
+    const double load = solver.loadFactor();
+    const double deflection = -meanDisplacement(solver, model, "centre")[2];
+    const double error = std::abs(load - roofReferenceLoad(deflection));  // relative to P_max
+    worst = std::max(worst, error);
+    if (deflection < 9.5) unstableBeforePeak |= report.negativePivots > 0;  // the peak lies at -W_C ~ 11
+    if (deflection > 11.0 && deflection < 19.5) unstableSeen |= report.negativePivots > 0;
+    if (deflection < 13.0) peak = std::max(peak, load);
+    if (deflection > 13.0 && deflection < 25.0) valley = std::min(valley, load);
+  }
+  std::printf("roof 8x8: %d increments, worst |P - P_ref(w)| %.4f P_max, peak %.4f (ref 0.7421), valley %.4f (ref "
+              "0.1729), end -W_C %.3f\n",
+              increments, worst, peak, valley, -meanDisplacement(solver, model, "centre")[2]);
+  EXPECT_DOUBLE_EQ(solver.loadFactor(), 1.0);  // the last arc ends on P_max
+  EXPECT_LT(increments, 200);
+  EXPECT_LT(worst, 0.03);
+  EXPECT_NEAR(peak, 0.7421, 0.03 * 0.7421);
+  EXPECT_NEAR(valley, 0.1729, 0.03);
+  EXPECT_TRUE(unstableSeen) << "the falling branch between the limit points is unstable";
+  EXPECT_FALSE(unstableBeforePeak);
+}
+
+TEST(TEST_CATEGORY, static_newton_load_control_reports_the_roof_snapping_through) {
+  using namespace perishell_test_static_newton;
+  const auto model = hingedRoof(8, "increments: 10, preconditioner: cholesky");
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  bool reported = false;
+  for (int k = 1; k <= 10 && !reported; ++k) {
+    try {
+      const auto report = solver.advanceTo(0.1 * k);
+      reported = report.negativePivots > 0 || report.passedUnstableState;
+      std::printf("load control %.1f: -W_C %.3f, negative pivots %ld, passed unstable states %d\n", 0.1 * k,
+                  -meanDisplacement(solver, model, "centre")[2], report.negativePivots, int(report.passedUnstableState));
+      EXPECT_TRUE(k >= 8 || !reported) << "nothing to report below the limit point (P/P_max 0.742)";
+    } catch (const perishell::solvers::NewtonFailure& failure) {
+      reported = true;
+      std::printf("load control %.1f: %s\n", 0.1 * k, failure.what());
+    }
+  }
+  EXPECT_TRUE(reported) << "load control passed the limit point silently";
+}
+
+TEST(TEST_CATEGORY, static_newton_arc_length_refuses_a_load_curve) {
+  using namespace perishell_test_static_newton;
+  const std::string text = R"(perishell:
+  version: 1
+  mesh: {generator: plate, length-x: 4.0, length-y: 1.0, spacing: 0.5}
+  material: {young-modulus: 1.2e6, poisson-ratio: 0.0, density: 1.0, thickness: 0.1}
+  zones: {default: ccm}
+  supports: {clamp: {set: left, dofs: [ux, uy, uz, rx, ry, rz]}}
+  loads: {tip: {type: edge-traction, set: right, vector: [0.0, 0.0, 4.0], curve: twice}}
+  curves: {twice: {type: table, time: [0.0, 1.0], value: [0.0, 2.0]}}
+  solver: {type: implicit, increments: 4, control: arc-length}
+)";
+  const auto model = perishell::model::buildModel(perishell::parseDeck(text, "curve.yaml"));
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+  EXPECT_EQ(solver.arcLengthObstacle(), "a load follows a curve");
 }

@@ -165,7 +165,11 @@ struct Curve {
 };
 
 enum class SolverType { Explicit, Implicit };
-enum class Preconditioner { Jacobi, BlockJacobi, Amg };
+// How Newton solves K du = r (docs/implicit.md, "Linear solvers"): PCG (GMRES for the exact
+// tangent) with a point or nodal-block Jacobi, smoothed-aggregation multigrid, or a sparse
+// Cholesky factorization of a recent tangent; Direct refactors at every Newton iteration; Auto
+// picks Cholesky or Amg by size and by the iterations AMG needs (solvers::NewtonOptions).
+enum class Preconditioner { Jacobi, BlockJacobi, Amg, Cholesky, Direct, Auto };
 // Auto: Exact where the model applies moments, else Symmetric (TangentForm, core/types.hpp).
 enum class Tangent { Auto, Symmetric, Exact };
 
@@ -182,12 +186,18 @@ struct ImplicitSettings {
   int increments = 1;
   int maxIterations = 100;
   double tolerance = 1e-8;  // Newton: residual norm relative to the external load norm
-  Preconditioner preconditioner = Preconditioner::Amg;  // 10-100x fewer PCG iterations on thin shells (docs/implicit.md)
+  Preconditioner preconditioner = Preconditioner::Auto;
   int maxCuts = 8;  // bisections of an increment Newton fails on, before the run stops
   Tangent tangent = Tangent::Auto;
   // Newton reuses the AMG hierarchy while its Krylov iterations stay within this factor of
   // those right after a rebuild; 0 rebuilds it every iteration (solvers::NewtonOptions).
   double amgReuse = 1.5;
+  bool lineSearch = false;  // solvers::NewtonOptions::lineSearch
+  // Load: the load factor steps 1/increments at a time. ArcLength: the load factor is an
+  // unknown of the arc-length method (solvers::StaticNewtonSolver::advanceByArcLength); its
+  // first step is 1/increments, and the run ends at load factor 1 or after maxIncrements.
+  enum class Control { Load, ArcLength } control = Control::Load;
+  int maxIncrements = 0;  // 0: 10 x increments
 };
 
 struct Solver {

@@ -22,6 +22,9 @@ class ProgressReporter {
   // Reports step (1-based, <= totalSteps) reached at simulated time [s]; prints when due.
   // Returns whether it printed.
   bool update(long long step, double simulatedTime);
+  // The same, with the run's own state in place of the simulated time (a static increment's
+  // load factor and iterations).
+  bool update(long long step, const std::string& state);
 
   double elapsedSeconds() const;
 

@@ -17,6 +17,9 @@ struct ImplicitRunSummary {
   int cuts = 0;
   long long newtonIterations = 0, linearIterations = 0;
   long long preconditionerBuilds = 0;
+  long long factorizations = 0;
+  long long lineSearches = 0;
+  long negativePivots = 0;  // the most any factorization found (> 0: past a limit point)
   double wallSeconds = 0.0;
   double maxDisplacement = 0.0;  // largest |u| of a node at the end [m]
   PhaseTimes phases;  // as written to timingsPath

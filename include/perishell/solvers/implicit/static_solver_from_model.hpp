@@ -37,12 +37,10 @@ StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& spac
   options.maxIterations = settings.maxIterations;
   options.tolerance = settings.tolerance;
   options.maxCuts = settings.maxCuts;
+  options.lineSearch = settings.lineSearch;
+  options.arcLengthFirstStep = 1.0 / settings.increments;
   options.amgReuseGrowth = settings.amgReuse;
-  switch (settings.preconditioner) {
-    case deck::Preconditioner::Jacobi: options.preconditioner = belos::CgOptions::Preconditioner::Jacobi; break;
-    case deck::Preconditioner::BlockJacobi: options.preconditioner = belos::CgOptions::Preconditioner::BlockJacobi; break;
-    case deck::Preconditioner::Amg: options.preconditioner = belos::CgOptions::Preconditioner::Amg; break;
-  }
+  options.preconditioner = settings.preconditioner;
   auto actions = makeExternalActions<Memory>(model);
   options.tangent = settings.tangent == deck::Tangent::Exact ||
                             (settings.tangent == deck::Tangent::Auto && appliesMoments(actions))

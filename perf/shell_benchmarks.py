@@ -1,0 +1,223 @@
+#!/usr/bin/env python3
+"""Implicit solver on the public nonlinear shell benchmarks of Sze, Liu & Lo (2004), "Popular
+benchmark problems for geometric nonlinear analysis of shells", Finite Elements in Analysis
+and Design 40: 3.3 the slit annular plate under a line force, 3.4 the hemispherical shell with
+an 18 degree hole (quarter), 3.8 the hinged cylindrical roof under a central point force
+(quarter, arc-length control through both limit points; §3.8 in the paper). Each
+case is written as a Gmsh 4.1 mesh and a deck, then run by `perishell run` once per
+preconditioner; the table gives wall time, increments, cuts, Newton and Krylov iterations and
+factorizations (medians over --repeats runs for the time).
+
+  perf/shell_benchmarks.py --app build/openmp/apps/perishell --out OUT [--cases slit,hemisphere,roof]
+                           [--preconditioners amg,cholesky,direct] [--repeats 3] [--backend host|device]
+
+Writes OUT/<case>/ (mesh, deck, runs) and OUT/shell_benchmarks.md.
+"""
+import argparse
+import math
+import os
+import re
+import statistics
+import subprocess
+import sys
+import time
+
+
+def write_msh(path, nodes, quads, groups):
+    """nodes: [(x, y, z)], 1-based quads [(a, b, c, d)], groups: name -> (dim, [elements]) where
+    a dim-1 element is a node pair and a dim-0 element a single node."""
+    names = list(groups)
+    lines = ["$MeshFormat", "4.1 0 8", "$EndMeshFormat", "$PhysicalNames", str(len(names) + 1)]
+    for tag, name in enumerate(names, start=1):
+        lines.append(f'{groups[name][0]} {tag} "{name}"')
+    lines += [f'2 {len(names) + 1} "shell"', "$EndPhysicalNames"]
+    points = [(t, n) for t, n in enumerate(names, start=1) if groups[n][0] == 0]
+    curves = [(t, n) for t, n in enumerate(names, start=1) if groups[n][0] == 1]
+    lines += ["$Entities", f"{len(points)} {len(curves)} 1 0"]
+    for tag, name in points:
+        x, y, z = nodes[groups[name][1][0] - 1]
+        lines.append(f"{tag} {x} {y} {z} 1 {tag}")
+    for tag, name in curves:
+        lines.append(f"{tag} 0 0 0 0 0 0 1 {tag} 0")
+    lines.append(f"1 0 0 0 0 0 0 1 {len(names) + 1} 0")
+    lines += ["$EndEntities", "$Nodes", f"1 {len(nodes)} 1 {len(nodes)}", f"2 1 0 {len(nodes)}"]
+    lines += [str(k) for k in range(1, len(nodes) + 1)]
+    lines += [f"{x:.12g} {y:.12g} {z:.12g}" for x, y, z in nodes]
+    lines += ["$EndNodes"]
+    blocks, tag = [], 1
+    for entity, name in points + curves:
+        dim, elements = groups[name]
+        block = [f"{dim} {entity} {15 if dim == 0 else 1} {len(elements)}"]
+        for element in elements:
+            element = element if isinstance(element, tuple) else (element,)
+            block.append(" ".join(map(str, (tag,) + element)))
+            tag += 1
+        blocks.append(block)
+    block = [f"2 1 3 {len(quads)}"]
+    for quad in quads:
+        block.append(" ".join(map(str, (tag,) + quad)))
+        tag += 1
+    blocks.append(block)
+    lines += ["$Elements", f"{len(blocks)} {tag - 1} 1 {tag - 1}"]
+    for block in blocks:
+        lines += block
+    lines += ["$EndElements"]
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def grid(n1, n2, position):
+    """(n1 + 1) x (n2 + 1) nodes at position(i / n1, j / n2); node (i, j) is 1 + j (n1 + 1) + i."""
+    nodes = [position(i / n1, j / n2) for j in range(n2 + 1) for i in range(n1 + 1)]
+    node = lambda i, j: 1 + j * (n1 + 1) + i
+    quads = [(node(i, j), node(i + 1, j), node(i + 1, j + 1), node(i, j + 1)) for j in range(n2) for i in range(n1)]
+    return nodes, quads, node
+
+
+def edge(node, indices):
+    return [(node(*a), node(*b)) for a, b in zip(indices, indices[1:])]
+
+
+def slit_plate(directory, scale):
+    """Sze 3.3: R_i 6, R_o 10, h 0.03, E 21e6, nu 0; clamped at theta = 0, line force q_max 0.8
+    per unit length in z at the other side of the slit; 10 x 80 at scale 1."""
+    nr, nt = 10 * scale, 80 * scale
+    nodes, quads, node = grid(nr, nt, lambda a, b: ((6 + 4 * a) * math.cos(2 * math.pi * b),
+                                                     (6 + 4 * a) * math.sin(2 * math.pi * b), 0.0))
+    write_msh(os.path.join(directory, "mesh.msh"), nodes, quads, {
+        "clamped": (1, edge(node, [(i, 0) for i in range(nr + 1)])),
+        "loaded": (1, edge(node, [(i, nt) for i in range(nr + 1)])),
+        "A": (0, [node(0, nt)]), "B": (0, [node(nr, nt)])})
+    return deck("Sze 3.3 slit annular plate", 21e6, 0.0, 0.03, """
+  supports:
+    clamp: {set: clamped, dofs: [ux, uy, uz, rx, ry, rz]}
+  loads:
+    line: {type: edge-traction, set: loaded, vector: [0.0, 0.0, 26.666666666667]}
+    probeA: {type: point-force, set: A, vector: [0.0, 0.0, 0.0]}
+    probeB: {type: point-force, set: B, vector: [0.0, 0.0, 0.0]}""", 20, 0.4 / scale)
+
+
+def hemisphere(directory, scale):
+    """Sze 3.4: R 10, h 0.04, E 6.825e7, nu 0.3, 18 degree hole; quarter with symmetry planes,
+    radial forces 200 (the full shell's 400, halved on the planes), pull at A, push at B."""
+    n = 16 * scale
+    psi0 = math.radians(18.0)
+    nodes, quads, node = grid(n, n, lambda a, b: (
+        10 * math.sin(psi0 + a * (math.pi / 2 - psi0)) * math.cos(b * math.pi / 2),
+        10 * math.sin(psi0 + a * (math.pi / 2 - psi0)) * math.sin(b * math.pi / 2),
+        10 * math.cos(psi0 + a * (math.pi / 2 - psi0))))
+    write_msh(os.path.join(directory, "mesh.msh"), nodes, quads, {
+        "y0": (1, edge(node, [(i, 0) for i in range(n + 1)])),
+        "x0": (1, edge(node, [(i, n) for i in range(n + 1)])),
+        "A": (0, [node(n, 0)]), "B": (0, [node(n, n)]), "pin": (0, [node(0, 0)])})
+    return deck("Sze 3.4 hemispherical shell", 6.825e7, 0.3, 0.04, """
+  supports:
+    symmetryY: {set: y0, dofs: [uy, rx, rz]}
+    symmetryX: {set: x0, dofs: [ux, ry, rz]}
+    pin: {set: pin, dofs: [uz]}
+  loads:
+    pull: {type: point-force, set: A, vector: [200.0, 0.0, 0.0]}
+    push: {type: point-force, set: B, vector: [0.0, -200.0, 0.0]}""", 20, 0.98 / scale)
+
+
+def roof(directory, scale):
+    """Sze 3.8 (the hinged roof; numbered 3.5 in our issues): R 2540, half length 254, half angle
+    0.1 rad, h 12.7, E 3102.75, nu 0.3; straight edge hinged, curved edge free; quarter with
+    symmetry planes, central force P_max 3000 / 4 = 750, arc-length control through both limit
+    points to P_max."""
+    n = 8 * scale
+    nodes, quads, node = grid(n, n, lambda a, b: (254.0 * a, 2540 * math.sin(0.1 * b),
+                                                  2540 * math.cos(0.1 * b) - 2540 * math.cos(0.1)))
+    write_msh(os.path.join(directory, "mesh.msh"), nodes, quads, {
+        "hinged": (1, edge(node, [(i, n) for i in range(n + 1)])),
+        "x0": (1, edge(node, [(0, j) for j in range(n + 1)])),
+        "y0": (1, edge(node, [(i, 0) for i in range(n + 1)])),
+        "centre": (0, [node(0, 0)])})
+    return deck("Sze 3.8 hinged cylindrical roof", 3102.75, 0.3, 12.7, """
+  supports:
+    hinge: {set: hinged, dofs: [ux, uy, uz]}
+    symmetryX: {set: x0, dofs: [ux, ry, rz]}
+    symmetryY: {set: y0, dofs: [uy, rx, rz]}
+  loads:
+    centre: {type: point-force, set: centre, vector: [0.0, 0.0, -750.0]}""", 20, 31.75 / scale,
+                "control: arc-length, max-increments: 200")
+
+
+def deck(title, young, poisson, thickness, actions, increments, spacing, control="control: load"):
+    return f"""perishell:
+  version: 1
+  title: "{title}"
+  mesh: {{generator: gmsh, file: mesh.msh, spacing: {spacing}}}
+  material: {{young-modulus: {young}, poisson-ratio: {poisson}, density: 1.0, thickness: {thickness}}}
+  zones: {{default: ccm}}{actions}
+  solver: {{type: implicit, increments: {increments}, {control}, preconditioner: PRECONDITIONER}}
+  output: {{directory: out, every: 0, history-every: 1, history: [load-points]}}
+"""
+
+
+CASES = {"slit": slit_plate, "hemisphere": hemisphere, "roof": roof}
+
+
+def run(app, deck_path, backend, log_path):
+    start = time.perf_counter()
+    result = subprocess.run([app, "run", deck_path, "--backend", backend], capture_output=True, text=True,
+                            env=dict(os.environ, OMP_PROC_BIND=os.environ.get("OMP_PROC_BIND", "false")))
+    seconds = time.perf_counter() - start
+    with open(log_path, "w") as f:
+        f.write(result.stdout + result.stderr)
+    text = result.stdout + result.stderr
+    number = lambda pattern: (re.search(pattern, text) or [None, "-"])[1]
+    return {"status": result.returncode, "seconds": seconds,
+            "increments": number(r"increments +([0-9]+(?: of [0-9]+)?) \("),
+            "cuts": number(r"increments +[0-9 of]+\(([0-9]+) cuts"),
+            "newton": number(r"Newton iterations +([0-9]+)"),
+            "krylov": number(r"linear iterations +([0-9]+)"),
+            "factorizations": number(r"\(([0-9]+) factorizations\)"),
+            "builds": number(r"\(([0-9]+) AMG builds\)"),
+            "max_u": number(r"max displacement +([0-9.e+-]+) m"),
+            "limit": "yes" if "negative pivot" in text else "no",
+            "error": "" if result.returncode == 0 else text.strip().splitlines()[-1][:160]}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--app", required=True)
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--cases", default="slit,hemisphere,roof")
+    parser.add_argument("--preconditioners", default="amg,cholesky,direct")
+    parser.add_argument("--repeats", type=int, default=1)
+    parser.add_argument("--scale", type=int, default=1, help="mesh refinement factor")
+    parser.add_argument("--backend", default="device", choices=["device", "host"])
+    args = parser.parse_args()
+    rows = []
+    for case in args.cases.split(","):
+        directory = os.path.join(args.out, case)
+        os.makedirs(directory, exist_ok=True)
+        template = CASES[case](directory, args.scale)
+        for preconditioner in args.preconditioners.split(","):
+            deck_path = os.path.join(directory, f"{preconditioner}.yaml")
+            with open(deck_path, "w") as f:
+                f.write(template.replace("PRECONDITIONER", preconditioner).replace(
+                    "directory: out", f"directory: out-{preconditioner}"))
+            runs = [run(args.app, deck_path, args.backend, os.path.join(directory, f"{preconditioner}-{r}.log"))
+                    for r in range(args.repeats)]
+            result = dict(runs[-1], seconds=statistics.median(r["seconds"] for r in runs))
+            rows.append((case, preconditioner, result))
+            print(f"{case:11s} {preconditioner:9s} {result['seconds']:8.2f} s  exit {result['status']}  "
+                  f"increments {result['increments']}  cuts {result['cuts']}  Newton {result['newton']}  "
+                  f"Krylov {result['krylov']}  factorizations {result['factorizations']}  "
+                  f"AMG builds {result['builds']}  max |u| {result['max_u']}  limit point {result['limit']}"
+                  + (f"  ({result['error']})" if result["error"] else ""), flush=True)
+    with open(os.path.join(args.out, "shell_benchmarks.md"), "w") as f:
+        f.write(f"backend {args.backend}, scale {args.scale}, median of {args.repeats} run(s)\n\n"
+                "| case | preconditioner | exit | wall s | increments | cuts | Newton | Krylov | factorizations |"
+                " AMG builds | max abs u | limit point |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+        for case, preconditioner, r in rows:
+            f.write(f"| {case} | {preconditioner} | {r['status']} | {r['seconds']:.2f} | {r['increments']} | "
+                    f"{r['cuts']} | {r['newton']} | {r['krylov']} | {r['factorizations']} | {r['builds']} | "
+                    f"{r['max_u']} | {r['limit']} |\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
