@@ -175,7 +175,7 @@ def run(app, deck_path, backend, log_path):
             "factorizations": number(r"\(([0-9]+) factorizations\)"),
             "builds": number(r"\(([0-9]+) AMG builds\)"),
             "max_u": number(r"max displacement +([0-9.e+-]+) m"),
-            "limit": "yes" if "negative pivot" in text else "no",
+            "limit": "yes" if "tangent             lost positive definiteness" in text else "no",
             "error": "" if result.returncode == 0 else text.strip().splitlines()[-1][:160]}
 
 

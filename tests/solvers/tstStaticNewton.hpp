@@ -194,7 +194,7 @@ TEST(TEST_CATEGORY, static_newton_cuts_an_increment_too_large_and_recovers) {
   using namespace perishell_test_static_newton;
   // The whole of Sze 3.1 in one increment, with too few iterations allowed to get there.
   const auto model =
-      stripModel("ccm", 0.5, 10.0, endShear, "increments: 1, max-iterations: 25, max-cuts: 8, tolerance: 1.0e-9");
+      stripModel("ccm", 0.5, 10.0, endShear, "increments: 1, max-iterations: 8, max-cuts: 8, tolerance: 1.0e-9");
   auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
   const auto report = solver.advanceTo(1.0);
   const auto tip = meanDisplacement(solver, model, "right");
@@ -604,4 +604,28 @@ TEST(TEST_CATEGORY, static_newton_arc_length_refuses_a_load_curve) {
   const auto model = perishell::model::buildModel(perishell::parseDeck(text, "curve.yaml"));
   auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
   EXPECT_EQ(solver.arcLengthObstacle(), "a load follows a curve");
+}
+
+TEST(TEST_CATEGORY, static_newton_auto_gives_way_from_amg_to_the_factorization) {
+  using namespace perishell_test_static_newton;
+  const auto model = stripModel("ccm", 0.5, 10.0, endShear, "increments: 20, tolerance: 1.0e-9, preconditioner: auto");
+  // Small models start with the factorization.
+  EXPECT_EQ(perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model).activePreconditioner(),
+            perishell::deck::Preconditioner::Cholesky);
+  // Above the size bound AMG starts; an increment whose solves averaged more Krylov
+  // iterations than the bound hands over to the factorization.
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model, [](perishell::solvers::NewtonOptions& o) {
+    o.autoCholeskyDofs = 0;
+    o.autoSwitchIterations = 1.0;
+  });
+  EXPECT_EQ(solver.activePreconditioner(), perishell::deck::Preconditioner::Amg);
+  const auto first = solver.advanceTo(0.05);
+  EXPECT_GT(first.linearIterations, first.newtonIterations);
+  EXPECT_EQ(first.factorizations, 0);
+  ASSERT_EQ(first.notes.size(), 1u);
+  EXPECT_NE(first.notes[0].find("switching to the Cholesky preconditioner"), std::string::npos) << first.notes[0];
+  EXPECT_EQ(solver.activePreconditioner(), perishell::deck::Preconditioner::Cholesky);
+  const auto second = solver.advanceTo(0.1);
+  EXPECT_GT(second.factorizations, 0);
+  EXPECT_NEAR(meanDisplacement(solver, model, "right")[2], 1.309, 0.02 * 6.698);  // Sze 3.1 at P/P_max 0.1
 }

@@ -76,8 +76,11 @@ struct NewtonOptions {
   // (up to autoSwitchDofs) after an increment whose linear solves averaged more than
   // autoSwitchIterations Krylov iterations; a factorization that fails (memory) goes back to Amg.
   deck::Preconditioner preconditioner = deck::Preconditioner::BlockJacobi;
-  long long autoCholeskyDofs = 300000;
-  long long autoSwitchDofs = 2000000;
+  // H200 and 2 CPU threads, reference BLAS (docs/implicit.md): the factorization wins by 2-4x
+  // on the curved shells of a few thousand DOF, AMG by 35x on the GPU for the flat pressed
+  // plate of 65,880 DOF (1.8 s per factorization).
+  long long autoCholeskyDofs = 20000;
+  long long autoSwitchDofs = 300000;
   double autoSwitchIterations = 60.0;
   // The Cholesky factor is reused while a solve needs at most this many Krylov iterations;
   // a solve that needs more refreshes it for the next one, and a reused factor that has not

@@ -7,6 +7,7 @@
 #include <perishell/solvers/implicit/static_newton.hpp>
 #include <perishell/solvers/model_actions.hpp>
 
+#include <functional>
 #include <vector>
 
 namespace perishell::solvers {
@@ -25,8 +26,11 @@ bool appliesMoments(const ExternalActions<MemorySpaceT>& actions) {
   return false;
 }
 
+// adjust, where given, changes the options the deck gave (the Newton settings no deck key
+// reaches, e.g. auto's thresholds in tests).
 template <class ExecutionSpaceT>
-StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& space, const model::Model& model) {
+StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& space, const model::Model& model,
+                                                     const std::function<void(NewtonOptions&)>& adjust = {}) {
   requireImplicitModel(model);
   using Memory = typename ExecutionSpaceT::memory_space;
   const auto& deck = model.deck;
@@ -46,6 +50,7 @@ StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& spac
                             (settings.tangent == deck::Tangent::Auto && appliesMoments(actions))
                         ? TangentForm::Exact
                         : TangentForm::Symmetric;
+  if (adjust) adjust(options);
   return StaticNewtonSolver<ExecutionSpaceT>(space, model.shell.mesh.numNodes(), bodies.shellElements(),
                                              bodies.bondCarriers(), std::move(actions), options);
 }
