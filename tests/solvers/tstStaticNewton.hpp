@@ -459,8 +459,6 @@ namespace perishell_test_static_newton {
 // curved edges free, P_max 3000 at the centre. Quarter model (n x n quads, symmetry on x = 0
 // and y = 0, P/4 at the centre), written as a Gmsh file.
 perishell::model::Model hingedRoof(int n, const std::string& solver) {
-  const double pi = 3.14159265358979323846;
-  (void)pi;
   auto node = [n](int i, int j) { return 1 + j * (n + 1) + i; };
   std::ostringstream msh;
   msh << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n5\n1 1 \"hinged\"\n1 2 \"x0\"\n1 3 \"y0\"\n"

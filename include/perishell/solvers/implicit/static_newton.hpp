@@ -319,7 +319,8 @@ class StaticNewtonSolver {
       if (attempt.empty()) {
         recordArcDirection();
         const int iterations = std::max(report.newtonIterations, 1);
-        arcLength_ = std::min(maxArcLength_, arcLength_ * std::clamp(std::sqrt(double(options_.desiredIterations) / iterations), 0.5, 2.0));
+        const double growth = std::clamp(std::sqrt(double(options_.desiredIterations) / iterations), 0.5, 2.0);
+        arcLength_ = std::min(maxArcLength_, growth * arcLength_);
         break;
       }
       restoreState();
@@ -343,7 +344,8 @@ class StaticNewtonSolver {
       report.factorizations += toStop.factorizations;
       report.cuts += toStop.cuts;
       report.negativePivots = toStop.negativePivots;
-      return report.loadFactor = loadFactor_, report;
+      report.loadFactor = loadFactor_;
+      return report;
     }
     report.loadFactor = loadFactor_;
     if (usesFactor()) factorConvergedTangent(report);
