@@ -248,9 +248,9 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
     if (last) break;
   }
   summary.increments = taken;
-  if (arcLength && solver.loadFactor() < 1.0)
-    log << "implicit: warning: arc-length control stopped at load factor " << formatNumber(solver.loadFactor(), 6)
-        << " after " << taken << " increments (solver.max-increments)\n";
+  // Arc-length control that ran out of increments short of the full load did not finish the
+  // deck's job: an error after the summary, unless --max-steps asked for fewer increments.
+  const bool stoppedShort = arcLength && solver.loadFactor() < 1.0 && increments == deckIncrements;
   summary.wallSeconds = std::chrono::duration<double>(Clock::now() - runStart).count();
   summary.xdmfPath = output.xdmfPath();
   summary.historyPath = output.historyPath();
@@ -298,6 +298,11 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
       .add("history", summary.historyPath)
       .add("timings", summary.timingsPath)
       .print(log);
+  if (stoppedShort)
+    throw NewtonFailure("arc-length control reached load factor " + formatNumber(solver.loadFactor(), 6) +
+                        ", not 1, in the deck's solver.max-increments (" + std::to_string(deckIncrements) +
+                        "); raise it, or raise solver.increments for a longer first arc. The states reached are in " +
+                        summary.xdmfPath);
   return summary;
 }
 

@@ -627,3 +627,26 @@ TEST(TEST_CATEGORY, static_newton_auto_gives_way_from_amg_to_the_factorization) 
   EXPECT_GT(second.factorizations, 0);
   EXPECT_NEAR(meanDisplacement(solver, model, "right")[2], 1.309, 0.02 * 6.698);  // Sze 3.1 at P/P_max 0.1
 }
+
+// solver.line-search: the whole of Sze 3.1 in one increment, where the full Newton updates
+// overshoot; shortened updates reach the same tip as plain Newton.
+TEST(TEST_CATEGORY, static_newton_line_search_shortens_overshooting_updates) {
+  using namespace perishell_test_static_newton;
+  double tip[2];
+  int lineSearches[2];
+  for (const bool search : {false, true}) {
+    const auto model = stripModel("ccm", 0.5, 10.0, endShear,
+                                  std::string("increments: 1, max-iterations: 60, tolerance: 1.0e-9, line-search: ") +
+                                      (search ? "true" : "false"));
+    auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+    const auto report = solver.advanceTo(1.0);
+    tip[search] = meanDisplacement(solver, model, "right")[2];
+    lineSearches[search] = report.lineSearches;
+    std::printf("line search %d: %d Newton iterations, %d shortened, %d cuts, w_tip %.9f\n", int(search),
+                report.newtonIterations, report.lineSearches, report.cuts, tip[search]);
+  }
+  EXPECT_EQ(lineSearches[0], 0);
+  EXPECT_GT(lineSearches[1], 0);
+  EXPECT_NEAR(tip[1], tip[0], 1e-6 * tip[0]);
+  EXPECT_NEAR(tip[1], 6.698, 0.02 * 6.698);
+}

@@ -235,16 +235,14 @@ class StaticNewtonSolver {
     return report;
   }
 
-  // The tangent at the current state (assembled, or as last assembled) with the supports
-  // eliminated symmetrically; rhs takes the elimination's right-hand side terms.
-  Matrix constrainedTangent(const VectorView<Memory>& rhs, bool assemble, IncrementReport& report) {
+  // The tangent assembled at the current state with the supports eliminated symmetrically;
+  // rhs takes the elimination's right-hand side terms.
+  Matrix constrainedTangent(const VectorView<Memory>& rhs, IncrementReport& report) {
     using Clock = std::chrono::steady_clock;
     auto start = Clock::now();
-    if (assemble) {
-      assembleTangent();
-      report.seconds.assembly += fencedSecondsSince(space_, start);
-      start = Clock::now();
-    }
+    assembleTangent();
+    report.seconds.assembly += fencedSecondsSince(space_, start);
+    start = Clock::now();
     assembly::eliminateDirichlet(space_, pattern_.rowMap, pattern_.columns, values_, rhs, isConstrained_, zerosConst());
     report.seconds.constraints += fencedSecondsSince(space_, start);
     const auto numRows = static_cast<LocalIndex>(rhs.extent(0));
@@ -267,7 +265,7 @@ class StaticNewtonSolver {
   // is stable (report.negativePivots), and the next increment starts from this fresh factor.
   void factorConvergedTangent(IncrementReport& report) {
     // The elimination's right-hand side is scratch here.
-    const Matrix K = constrainedTangent(flatCorrection(), true, report);
+    const Matrix K = constrainedTangent(flatCorrection(), report);
     try {
       const bool passedBefore = report.passedUnstableState;
       report.negativePivots = factorize(K, report).negativePivots;
@@ -403,7 +401,7 @@ class StaticNewtonSolver {
       linear.fallbackOnBreakdown = false;
       // r is the right-hand side in place: the next iteration evaluates it afresh.
       const VectorView<Memory> rhs = flatOutOfBalance();
-      const Matrix K = constrainedTangent(rhs, true, report);
+      const Matrix K = constrainedTangent(rhs, report);
       const VectorView<Memory> solution = flatCorrection();
       belos::CgResult result;
       std::string linearFailure;
@@ -423,7 +421,8 @@ class StaticNewtonSolver {
       if (!linearFailure.empty()) return linearFailure;
       ++report.newtonIterations;
       start = Clock::now();
-      const double slope = freeDot();  // s(0) = du . r: > 0 where du descends the energy
+      // s(0) = du . r: > 0 where du descends the energy.
+      const double slope = options_.lineSearch ? freeDot() : 0.0;
       if (options_.lineSearch) saveIterate();
       applyCorrection(1.0);
       report.seconds.update += fencedSecondsSince(space_, start);
@@ -844,13 +843,12 @@ class StaticNewtonSolver {
         });
   }
 
-  // Assembles K at the current state with the supports eliminated and solves K x = rhs (the
-  // rhs view is consumed); x is `into` (correction_ or tangentDirection_). Returns why it
-  // failed, or empty.
-  std::string solveTangent(const pd::NodalVectorView<Memory>& rhs, const pd::NodalVectorView<Memory>& into,
-                           bool assemble, double tolerance, bool attemptStart, IncrementReport& report) {
+  // Solves K x = rhs (rhs with its constrained rows zero, consumed); x is `into`
+  // (correction_ or tangentDirection_). Returns why it failed, or empty.
+  std::string solveTangent(const Matrix& K, const pd::NodalVectorView<Memory>& rhs,
+                           const pd::NodalVectorView<Memory>& into, double tolerance, bool attemptStart,
+                           IncrementReport& report) {
     const VectorView<Memory> flatRhs(rhs.data(), 6 * std::size_t(numNodes_));
-    const Matrix K = constrainedTangent(flatRhs, assemble, report);
     belos::CgOptions linear = linearOptions(tolerance);
     linear.fallbackOnBreakdown = true;  // past a limit point the tangent is indefinite
     try {
@@ -868,7 +866,9 @@ class StaticNewtonSolver {
   std::string arcLengthIterate(IncrementReport& report) {
     // Predictor: dt = K^-1 P_ref at the converged state.
     Kokkos::deep_copy(space_, outOfBalance_, referenceLoad_);
-    std::string failure = solveTangent(outOfBalance_, tangentDirection_, true, 1e-8, true, report);
+    std::string failure =
+        solveTangent(constrainedTangent(flatOutOfBalance(), report), outOfBalance_, tangentDirection_, 1e-8,
+                     true, report);
     if (!failure.empty()) return failure;
     const double tangentNorm = std::sqrt(translationDot(1, 1));
     if (!(tangentNorm > 0.0)) return "the reference load moves no translation (is any load applied?)";
@@ -895,10 +895,11 @@ class StaticNewtonSolver {
       if (iteration > 2 && norms.free > 1e4 * initialResidual) return "diverging";
       // Corrector: K dr = r and K dt = P_ref with the same tangent.
       const double tolerance = std::clamp(0.1 * options_.tolerance * reference / std::max(norms.free, 1e-300), 1e-10, 1e-3);
-      failure = solveTangent(outOfBalance_, correction_, true, tolerance, false, report);
+      const Matrix K = constrainedTangent(flatOutOfBalance(), report);
+      failure = solveTangent(K, outOfBalance_, correction_, tolerance, false, report);
       if (!failure.empty()) return failure;
-      Kokkos::deep_copy(space_, outOfBalance_, referenceLoad_);
-      failure = solveTangent(outOfBalance_, tangentDirection_, false, 1e-8, false, report);
+      Kokkos::deep_copy(space_, outOfBalance_, referenceLoad_);  // constrained rows zero already
+      failure = solveTangent(K, outOfBalance_, tangentDirection_, 1e-8, false, report);
       if (!failure.empty()) return failure;
       // |delta u + dr + ds dt|^2 = l^2: a ds^2 + b ds + c = 0.
       const double tt = translationDot(1, 1), rt = translationDot(0, 1), ut = translationDot(2, 1);
