@@ -104,6 +104,16 @@ class Scanner {
     throw std::runtime_error(source_ + ":" + std::to_string(line) + ": " + reason);
   }
 
+  // An entity or physical tag. Gmsh writes a tag negative where the entity is used with its
+  // orientation reversed (Extrude, Physical Curve{-4}, $Entities' signed physical tags); the
+  // sign says nothing about which entity or group is meant, so it is dropped here.
+  int unsignedTag(const char* what) {
+    const int line = peekLine();
+    const long long tag = integerIn(what, -INT32_MAX, INT32_MAX);
+    if (tag == 0) fail(line, std::string(what) + " 0 is not a Gmsh tag (tags start at 1)");
+    return static_cast<int>(tag < 0 ? -tag : tag);
+  }
+
   std::string section;
 
  private:
@@ -181,7 +191,7 @@ void readPhysicalNames(Scanner& scanner, GmshFile& file) {
   for (long long i = 0; i < count; ++i) {
     const int dimension = static_cast<int>(scanner.integerIn("a physical group dimension", 0, 3));
     const int line = scanner.peekLine();
-    const int tag = static_cast<int>(scanner.integerIn("a physical tag", 1, INT32_MAX));
+    const int tag = scanner.unsignedTag("a physical tag");
     const Token name = scanner.next("a physical name");
     if (name.text.size() < 3 || name.text.front() != '"')
       scanner.fail(name.line, "expected a non-empty quoted physical name, got '" +
@@ -202,14 +212,17 @@ void readEntities(Scanner& scanner, GmshFile& file) {
   for (int dimension = 0; dimension < 4; ++dimension)
     for (long long i = 0; i < counts[dimension]; ++i) {
       const int line = scanner.peekLine();
-      const int tag = static_cast<int>(scanner.integerIn("an entity tag", 1, INT32_MAX));
+      const int tag = scanner.unsignedTag("an entity tag");
       // A point has its position, the others a bounding box.
       for (int k = 0; k < (dimension == 0 ? 3 : 6); ++k) scanner.real("an entity coordinate");
       // Counts are read, not trusted: containers grow by the items actually present.
       std::vector<int> physicals;
       const long long numPhysicals = scanner.integerIn("the number of physical tags", 0, maxCount);
-      for (long long p = 0; p < numPhysicals; ++p)
-        physicals.push_back(static_cast<int>(scanner.integerIn("a physical tag", INT32_MIN, INT32_MAX)));
+      for (long long p = 0; p < numPhysicals; ++p) {
+        const int physical = scanner.unsignedTag("a physical tag");
+        // Listed with both signs, the entity is in the group once.
+        if (std::find(physicals.begin(), physicals.end(), physical) == physicals.end()) physicals.push_back(physical);
+      }
       if (dimension > 0) {
         const long long bounding = scanner.integerIn("the number of bounding entities", 0, maxCount);
         for (long long b = 0; b < bounding; ++b) scanner.integer("a bounding entity tag");
@@ -265,7 +278,7 @@ void readElements(Scanner& scanner, GmshFile& file) {
   for (long long block = 0; block < blocks; ++block) {
     const int blockLine = scanner.peekLine();
     const int dimension = static_cast<int>(scanner.integerIn("an element block's entity dimension", 0, 3));
-    const int entityTag = static_cast<int>(scanner.integerIn("an element block's entity tag", 1, INT32_MAX));
+    const int entityTag = scanner.unsignedTag("an element block's entity tag");
     const long long type = scanner.integer("an element type");
     if (type != quadType && type != lineType && type != pointType) rejectElementType(scanner, blockLine, type);
     if (dimensionOf(static_cast<int>(type)) != dimension)

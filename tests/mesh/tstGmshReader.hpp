@@ -216,6 +216,26 @@ TEST(TEST_CATEGORY, gmsh_save_all_off_style_file) {
   EXPECT_NEAR(totalArea<TEST_EXECSPACE>(shell.mesh), 0.08, 1e-16);
 }
 
+TEST(TEST_CATEGORY, gmsh_negative_tags_keep_their_group_names_and_sets) {
+  // Gmsh writes a tag negative where an entity is used reversed (Extrude, Physical Curve{-4}):
+  // a signed physical tag in $Entities, an element block on a signed entity. Here the left
+  // curve (entity 4) is in "left" as -1 and its lines' block names entity -4; the right
+  // curve lists "right" with both signs. Names and sets come out as in the unsigned file.
+  const std::string plate = plateText();
+  std::string text = replaced(plate, "4 0 0 0 0 0.2 0 1 1 2 4 -1", "4 0 0 0 0 0.2 0 1 -1 2 4 -1");
+  text = replaced(text, "2 0.4 0 0 0.4 0.2 0 1 2 2 2 -3", "2 0.4 0 0 0.4 0.2 0 2 -2 2 2 2 -3");
+  text = replaced(text, "1 4 1 2\n3 4 12", "1 -4 1 2\n3 4 12");
+  const ShellMesh signedTags = perishell::mesh::parseGmsh(text, "signed.msh");
+  const ShellMesh unsignedTags = perishell::mesh::parseGmsh(plate, "plate.msh");
+  EXPECT_EQ(signedTags.sets.nodeSets, unsignedTags.sets.nodeSets);
+  EXPECT_EQ(signedTags.sets.edgeSets, unsignedTags.sets.edgeSets);
+  EXPECT_EQ(signedTags.sets.elementSets, unsignedTags.sets.elementSets);
+  EXPECT_EQ(signedTags.sets.edgeSet("left").size(), 2u);
+  EXPECT_EQ(signedTags.sets.edgeSet("right").size(), 2u);  // once, though listed with both signs
+  EXPECT_EQ(readerError(replaced(plate, "1 4 1 2\n3 4 12", "1 0 1 2\n3 4 12")),
+            "mem.msh:69: an element block's entity tag 0 is not a Gmsh tag (tags start at 1)");
+}
+
 TEST(TEST_CATEGORY, gmsh_written_cylinder_joins_its_patches) {
   // Written by gmsh 4.8.4 (Mesh.SaveAll = 0) from: four quarter circles of radius 0.1 with
   // 3 nodes each, extruded 0.3 along z in 2 recombined layers; Physical Surface("wall") = the
