@@ -5,6 +5,7 @@
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/model.hpp>
 #include <perishell/solvers/explicit/explicit_run.hpp>
+#include <perishell/solvers/history_columns.hpp>
 #include <perishell/solvers/implicit/implicit_run.hpp>
 
 #include <chrono>
@@ -170,6 +171,7 @@ int runCheck(const std::vector<std::string>& args) {
   const auto start = std::chrono::steady_clock::now();
   const perishell::Deck deck = perishell::readDeck(deckPath);
   const auto model = perishell::model::buildModel(deck);
+  const auto probes = perishell::solvers::snapProbes(model);  // a probe off the shell is a deck error
   const auto bondStart = std::chrono::steady_clock::now();
   const auto bonds = perishell::model::buildPdBonds(perishell::ExecutionSpace{}, model);
   Kokkos::fence();
@@ -194,6 +196,9 @@ int runCheck(const std::vector<std::string>& args) {
   std::printf("  %-10s %zu supports, %zu loads, %zu curves; %s solver\n", "setup", deck.supports.size(),
               deck.loads.size(), deck.curves.size(),
               deck.solver.type == perishell::deck::SolverType::Explicit ? "explicit" : "implicit");
+  for (const auto& probe : probes)
+    std::printf("  %-10s %s: node %d, %g m from the deck's point\n", "probe", probe.name.c_str(),
+                static_cast<int>(probe.node), probe.distance);
   if (!outputDirectory.empty())
     std::printf("  %-10s %s (pd-node, bonds)\n", "output", writeModelOutput(outputDirectory, model, bonds).c_str());
   for (const auto& warning : deck.warnings) std::printf("  warning: %s\n", warning.c_str());

@@ -350,6 +350,15 @@ std::pair<Vector3, Vector3> readBox(const Section& box) {
   return {min, max};
 }
 
+// A map of named points ({tip: [x, y, z], ...}), at least one (zones.pd-ratio.around, output.probes).
+std::vector<deck::NamedPoint> readNamedPoints(const Section& parent, const std::string& key, const char* example) {
+  const Section points = parent.sublist(key);
+  std::vector<deck::NamedPoint> result;
+  for (const auto& name : points.keys()) result.push_back({name, points.vector3(name)});
+  if (result.empty()) parent.fail(key, std::string("needs at least one named point, e.g. ") + example);
+  return result;
+}
+
 deck::Mesh readMesh(const Section& section, const std::filesystem::path& baseDirectory) {
   using deck::MeshGenerator;
   const std::vector<std::string> common{"generator", "spacing", "pre-cracks", "node-sets"};
@@ -540,10 +549,7 @@ deck::Zones readZones(const Section& section, double horizon) {
     if (!(pdRatio.target >= 0.0 && pdRatio.target <= 1.0))
       ratio.fail("target", "must lie in [0, 1] (the fraction of elements flagged PD), got " +
                                formatNumber(pdRatio.target));
-    const Section around = ratio.sublist("around");
-    for (const auto& name : around.keys())
-      pdRatio.around.push_back({name, around.vector3(name)});
-    if (pdRatio.around.empty()) ratio.fail("around", "needs at least one named point");
+    pdRatio.around = readNamedPoints(ratio, "around", "{tip: [0.1, 0, 0]}");
     zones.pdRatio = pdRatio;
   }
   if (section.has("adaptive")) {
@@ -765,7 +771,7 @@ deck::Solver readSolver(const Section& section) {
 }
 
 deck::Output readOutput(const Section& section, const std::filesystem::path& baseDirectory) {
-  section.allowOnly({"directory", "every", "history-every", "fields", "history"});
+  section.allowOnly({"directory", "every", "history-every", "fields", "history", "probes"});
   deck::Output output;
   output.directory = resolveAgainst(baseDirectory, section.text("directory", output.directory));
   output.every = section.integer("every", output.every);
@@ -786,6 +792,14 @@ deck::Output readOutput(const Section& section, const std::filesystem::path& bas
         {{"energy", deck::HistoryQuantity::Energy}, {"reactions", deck::HistoryQuantity::Reactions},
          {"broken-bonds", deck::HistoryQuantity::BrokenBonds},
          {"crack-tip", deck::HistoryQuantity::CrackTip}, {"load-points", deck::HistoryQuantity::LoadPoints}});
+  if (section.has("probes")) {
+    output.probes = readNamedPoints(section, "probes", "{tip: [0.1, 0, 0]}");
+    // The name heads history.csv columns, which hold no commas, quotes or line breaks.
+    for (const auto& probe : output.probes)
+      if (probe.name.find_first_of(",\"\r\n") != std::string::npos)
+        section.fail("probes." + probe.name, "a probe's name heads its history.csv columns (<name>-ux ...) and may not "
+                                             "hold commas, quotes or line breaks");
+  }
   return output;
 }
 
@@ -822,6 +836,13 @@ void checkCrossReferences(Deck& deck, const Section& root) {
   if (deck.solver.type == deck::SolverType::Implicit &&
       std::find(fields.begin(), fields.end(), deck::OutputField::Velocity) != fields.end())
     root.fail("output.fields", "velocity exists only for the explicit solver");
+  const auto& history = deck.output.history;
+  if (std::find(history.begin(), history.end(), deck::HistoryQuantity::LoadPoints) != history.end())
+    for (const auto& probe : deck.output.probes)
+      for (const auto& load : deck.loads)
+        if (load.type == deck::LoadType::PointForce && load.name == probe.name)
+          root.fail("output.probes." + probe.name, "the probe's columns " + probe.name + "-ux, -uy, -uz would repeat "
+                    "the load-points columns of loads." + load.name + "; rename the probe");
   if (deck.zones.adaptive) {
     if (deck.solver.type != deck::SolverType::Explicit)
       root.fail("zones.adaptive", "the PD zone grows only in explicit runs (solver.type: explicit)");

@@ -163,9 +163,8 @@ NodalField makeRotationVectorField(
   Kokkos::View<double**, Kokkos::LayoutRight, Kokkos::HostSpace> rotationVectors(name, numNodes, 3);
   for (std::size_t node = 0; node < numNodes; ++node) {
     const double q[4] = {quaternions(node, 0), quaternions(node, 1), quaternions(node, 2), quaternions(node, 3)};
-    double R[3][3], theta[3];
-    rotation::toMatrix(q, R);
-    rotation::logarithm(R, theta);
+    double theta[3];
+    rotation::rotationVector(q, theta);
     for (int d = 0; d < 3; ++d) rotationVectors(node, d) = theta[d];
   }
   return {std::move(name), 3, rotationVectors};

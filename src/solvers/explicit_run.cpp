@@ -5,6 +5,7 @@
 #include <perishell/coupling/adaptive_zone.hpp>
 #include <perishell/solvers/explicit/central_difference.hpp>
 #include <perishell/solvers/explicit/explicit_run.hpp>
+#include <perishell/solvers/history_columns.hpp>
 #include <perishell/solvers/model_actions.hpp>
 
 #include <algorithm>
@@ -51,9 +52,11 @@ template <class ExecutionSpaceT>
 class RunOutput {
  public:
   using Solver = CentralDifferenceSolver<ExecutionSpaceT>;
-  RunOutput(const model::Model& model, const std::string& directory, const Solver& solver)
+  RunOutput(const model::Model& model, const std::string& directory, const Solver& solver,
+            const HistoryColumns& shared)
       : model_(model),
         solver_(solver),
+        shared_(shared),
         writer_(createdDirectory(directory), "results", model.shell.mesh),
         damage_("pd damage", model.shell.mesh.numNodes()),
         zoneNodes_(model.pdNodes) {
@@ -63,6 +66,9 @@ class RunOutput {
       if (!load.curve.empty() && std::find(curves_.begin(), curves_.end(), load.curve) == curves_.end())
         curves_.push_back(load.curve);
     for (const auto& curve : curves_) columns.push_back("load-factor-" + curve);
+    auto add = [&columns](const std::vector<std::string>& more) {
+      columns.insert(columns.end(), more.begin(), more.end());
+    };
     for (const auto quantity : deck.output.history) {
       switch (quantity) {
         case deck::HistoryQuantity::Energy:
@@ -71,21 +77,19 @@ class RunOutput {
             columns.push_back(name);
           break;
         case deck::HistoryQuantity::Reactions:
-          for (const auto& support : deck.supports)
-            for (const char* axis : {"x", "y", "z"}) columns.push_back("reaction-" + support.name + "-" + axis);
+          add(shared.reactionColumns());
+          // The loads on prescribed DOFs go straight into the supports (host copies of the patterns).
+          hostActions_ = makeExternalActions<Kokkos::HostSpace>(model);
           break;
         case deck::HistoryQuantity::BrokenBonds: columns.push_back("broken-bonds"); break;
         case deck::HistoryQuantity::CrackTip:
           for (const char* name : {"crack-tip-x", "crack-tip-y", "crack-tip-z", "crack-length", "crack-tip-speed"})
             columns.push_back(name);
           break;
-        case deck::HistoryQuantity::LoadPoints:
-          for (const auto& load : deck.loads)
-            if (load.type == deck::LoadType::PointForce)
-              for (const char* axis : {"ux", "uy", "uz"}) columns.push_back(load.name + "-" + axis);
-          break;
+        case deck::HistoryQuantity::LoadPoints: add(shared.loadPointColumns()); break;
       }
     }
+    add(shared.probeColumns());
     history_.emplace(directory + "/history.csv", columns);
     if (!deck.mesh.preCracks.empty()) {
       const auto& start = deck.mesh.preCracks.front().segment.start;
@@ -139,46 +143,56 @@ class RunOutput {
     std::vector<double> row = {double(solver.stepIndex()), solver.time()};
     for (const auto& curve : curves_) row.push_back(deck::evaluateCurve(*deck.findCurve(curve), solver.time()));
     HostVector3 displacements;
+    auto currentDisplacements = [&] {
+      if (displacements.extent(0) == 0) displacements = hostDisplacements();
+      return displacements;
+    };
+    // energies() evaluates the forces of the row's state (a step leaves those of the state before).
+    std::optional<EnergyReport> energy;
+    auto currentEnergies = [&] {
+      if (!energy) energy = solver.energies();
+      return *energy;
+    };
     for (const auto quantity : deck.output.history) {
       switch (quantity) {
         case deck::HistoryQuantity::Energy: {
-          const auto e = solver.energies();
+          const auto e = currentEnergies();
           row.insert(row.end(),
                      {e.kinetic, e.strain, e.fracture, e.damping, e.externalWork, e.supportWork, e.balanceError()});
           break;
         }
-        case deck::HistoryQuantity::Reactions: {
-          // Reactions balance the internal forces at the prescribed nodes (inertia of those nodes left out).
-          const auto forces = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.forces());
-          for (const auto& support : deck.supports) {
-            double sum[3] = {0.0, 0.0, 0.0};
-            for (const LocalIndex node : model_.shell.sets.nodesOfNodeOrEdgeSet(support.set))
-              for (int d = 0; d < 3; ++d) sum[d] -= forces(node, d);
-            row.insert(row.end(), sum, sum + 3);
-          }
+        case deck::HistoryQuantity::Reactions:
+          currentEnergies();
+          shared_.appendReactions(outOfBalance(), row);
           break;
-        }
         case deck::HistoryQuantity::BrokenBonds: row.push_back(double(solver.brokenBonds())); break;
         case deck::HistoryQuantity::CrackTip: appendCrackTip(solver.time(), row); break;
-        case deck::HistoryQuantity::LoadPoints:
-          if (displacements.extent(0) == 0) displacements = hostDisplacements();
-          for (const auto& load : deck.loads) {
-            if (load.type != deck::LoadType::PointForce) continue;
-            const auto& nodes = model_.shell.sets.nodeSet(load.set);
-            double mean[3] = {0.0, 0.0, 0.0};
-            for (const LocalIndex node : nodes)
-              for (int d = 0; d < 3; ++d) mean[d] += displacements(node, d) / nodes.size();
-            row.insert(row.end(), mean, mean + 3);
-          }
-          break;
+        case deck::HistoryQuantity::LoadPoints: shared_.appendLoadPoints(currentDisplacements(), row); break;
       }
     }
+    if (!shared_.probes().empty())
+      shared_.appendProbes(currentDisplacements(),
+                           Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.kinematics().rotations),
+                           row);
     history_->append(row);
   }
 
  private:
   HostVector3 hostDisplacements() const {
     return Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().displacements);
+  }
+
+  // P + the bond and element forces at every node DOF at the row's time, the forces being those
+  // of the last evaluation (energies() takes the row's state): what the supports balance where
+  // they prescribe a DOF (the inertia of prescribed nodes left out).
+  model::HostNodalValues outOfBalance() const {
+    model::HostNodalValues sum("out of balance", model_.shell.mesh.numNodes());
+    Kokkos::deep_copy(sum, solver_.forces());
+    const auto factors = hostActions_.loadFactors(solver_.time());
+    for (std::size_t node = 0; node < sum.extent(0); ++node)
+      for (int p = 0; p < hostActions_.numPatterns(); ++p)
+        for (int d = 0; d < 6; ++d) sum(node, d) += factors.values[p] * hostActions_.loadPatterns(node, 6 * p + d);
+    return sum;
   }
 
   Kokkos::View<double*, Kokkos::HostSpace> hostDamage() {
@@ -211,6 +225,8 @@ class RunOutput {
 
   const model::Model& model_;
   const Solver& solver_;
+  const HistoryColumns& shared_;
+  ExternalActions<Kokkos::HostSpace> hostActions_;  // with reactions only
   io::XdmfTimeSeriesWriter writer_;
   std::optional<io::CsvHistory> history_;
   VectorView<typename ExecutionSpaceT::memory_space> damage_;
@@ -228,6 +244,9 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   const auto& deck = model.deck;
   const auto& settings = deck.solver.explicitSettings;
   const auto setupStart = Clock::now();
+  // Before the solver's set-up, so that a probe off the shell stops the run at once.
+  const HistoryColumns historyColumns(model);
+  printProbes(model, historyColumns.probes(), log);
   // Bonds where alpha > 0, shell elements where the model is CCM or in the transition (model.md §4);
   // with zones.adaptive the zone object owns them and grows the PD zone during the run.
   std::optional<coupling::AdaptivePdZone<ExecutionSpaceT>> adaptive;
@@ -272,7 +291,7 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   // The run's wall time starts with the first output, so total = setup + run.
   const auto runStart = Clock::now();
   auto outputStart = runStart;
-  RunOutput<ExecutionSpaceT> output(model, directory, solver);
+  RunOutput<ExecutionSpaceT> output(model, directory, solver, historyColumns);
   output.writeFields();
   output.appendHistory(solver);
   double outputSeconds = fencedSecondsSince(space, outputStart), adaptiveSeconds = 0.0;

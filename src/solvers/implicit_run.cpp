@@ -2,6 +2,7 @@
 #include <perishell/io/csv_history.hpp>
 #include <perishell/io/progress.hpp>
 #include <perishell/io/xdmf_writer.hpp>
+#include <perishell/solvers/history_columns.hpp>
 #include <perishell/solvers/implicit/implicit_run.hpp>
 #include <perishell/solvers/implicit/static_solver_from_model.hpp>
 
@@ -39,20 +40,20 @@ template <class ExecutionSpaceT>
 class ImplicitOutput {
  public:
   using Solver = StaticNewtonSolver<ExecutionSpaceT>;
-  ImplicitOutput(const model::Model& model, const std::string& directory, const Solver& solver)
-      : model_(model), solver_(solver), writer_((std::filesystem::create_directories(directory), directory), "results",
-                                                model.shell.mesh) {
+  ImplicitOutput(const model::Model& model, const std::string& directory, const Solver& solver,
+                 const HistoryColumns& shared)
+      : model_(model), solver_(solver), shared_(shared),
+        writer_((std::filesystem::create_directories(directory), directory), "results", model.shell.mesh) {
     std::vector<std::string> columns = {"increment", "load-factor", "newton-iterations", "linear-iterations", "cuts",
                                         "relative-residual", "max-displacement"};
+    auto add = [&columns](const std::vector<std::string>& more) {
+      columns.insert(columns.end(), more.begin(), more.end());
+    };
     for (const auto quantity : model.deck.output.history) {
-      if (quantity == deck::HistoryQuantity::Reactions)
-        for (const auto& support : model.deck.supports)
-          for (const char* axis : {"x", "y", "z"}) columns.push_back("reaction-" + support.name + "-" + axis);
-      if (quantity == deck::HistoryQuantity::LoadPoints)
-        for (const auto& load : model.deck.loads)
-          if (load.type == deck::LoadType::PointForce)
-            for (const char* axis : {"ux", "uy", "uz"}) columns.push_back(load.name + "-" + axis);
+      if (quantity == deck::HistoryQuantity::Reactions) add(shared.reactionColumns());
+      if (quantity == deck::HistoryQuantity::LoadPoints) add(shared.loadPointColumns());
     }
+    add(shared.probeColumns());
     history_.emplace(directory + "/history.csv", columns);
   }
 
@@ -94,28 +95,15 @@ class ImplicitOutput {
     std::vector<double> row = {double(increment), report.loadFactor, double(report.newtonIterations),
                                double(report.linearIterations), double(report.cuts), report.relativeResidual,
                                maxDisplacement};
-    const auto& deck = model_.deck;
-    for (const auto quantity : deck.output.history) {
-      if (quantity == deck::HistoryQuantity::Reactions) {
-        // The support carries what the out-of-balance force lacks: R = F_int - P = -r.
-        const auto r = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.outOfBalance());
-        for (const auto& support : deck.supports) {
-          double sum[3] = {0.0, 0.0, 0.0};
-          for (const LocalIndex node : model_.shell.sets.nodesOfNodeOrEdgeSet(support.set))
-            for (int d = 0; d < 3; ++d) sum[d] -= r(node, d);
-          row.insert(row.end(), sum, sum + 3);
-        }
-      }
-      if (quantity == deck::HistoryQuantity::LoadPoints)
-        for (const auto& load : deck.loads) {
-          if (load.type != deck::LoadType::PointForce) continue;
-          const auto& nodes = model_.shell.sets.nodeSet(load.set);
-          double mean[3] = {0.0, 0.0, 0.0};
-          for (const LocalIndex node : nodes)
-            for (int d = 0; d < 3; ++d) mean[d] += u(node, d) / nodes.size();
-          row.insert(row.end(), mean, mean + 3);
-        }
+    for (const auto quantity : model_.deck.output.history) {
+      // The support carries what the out-of-balance force lacks: R = F_int - P = -r.
+      if (quantity == deck::HistoryQuantity::Reactions)
+        shared_.appendReactions(Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.outOfBalance()), row);
+      if (quantity == deck::HistoryQuantity::LoadPoints) shared_.appendLoadPoints(u, row);
     }
+    if (!shared_.probes().empty())
+      shared_.appendProbes(u, Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().rotations),
+                           row);
     history_->append(row);
     return maxDisplacement;
   }
@@ -127,6 +115,7 @@ class ImplicitOutput {
 
   const model::Model& model_;
   const Solver& solver_;
+  const HistoryColumns& shared_;
   io::XdmfTimeSeriesWriter writer_;
   std::optional<io::CsvHistory> history_;
 };
@@ -163,6 +152,9 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   const int deckIncrements = arcLength ? settings.maxIncrements : settings.increments;
   const int increments = static_cast<int>(std::min<long long>(deckIncrements, runOptions.maxSteps.value_or(deckIncrements)));
   const auto setupStart = Clock::now();
+  // Before the solver's set-up, so that a probe off the shell stops the run at once.
+  const HistoryColumns historyColumns(model);
+  printProbes(model, historyColumns.probes(), log);
   auto solver = makeStaticSolver(space, model);
   if (arcLength) {
     const std::string obstacle = solver.arcLengthObstacle();
@@ -185,7 +177,7 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   // The run's wall time starts with the first output, so total = setup + run.
   const auto runStart = Clock::now();
   auto outputStart = runStart;
-  ImplicitOutput<ExecutionSpaceT> output(model, directory, solver);
+  ImplicitOutput<ExecutionSpaceT> output(model, directory, solver, historyColumns);
   output.writeFields();
   double outputSeconds = fencedSecondsSince(space, outputStart);
   // Every increment prints: static increments are few and each one's iterations matter.

@@ -2,6 +2,7 @@
 // numbers; defaults, curves and relative paths behave as docs/deck.md says; every validation
 // rule is broken once and its message must name the key path and the reason.
 #include <perishell/io/deck.hpp>
+#include <perishell/solvers/history_columns.hpp>
 
 #include <unistd.h>
 
@@ -293,6 +294,7 @@ perishell:
     history-every: 2
     fields: [displacement, rotation, damage, zone]
     history: [energy, reactions, load-points]
+    probes: {mid: [0.1, 0, 0.3], base: [0.1, 0, 0]}
 ...
 )";
   const Deck deck = parseDeck(text, "cases/every_key.yaml");
@@ -369,6 +371,11 @@ perishell:
   EXPECT_EQ(deck.output.history,
             (std::vector<deck::HistoryQuantity>{deck::HistoryQuantity::Energy, deck::HistoryQuantity::Reactions,
                                                 deck::HistoryQuantity::LoadPoints}));
+  ASSERT_EQ(deck.output.probes.size(), 2u);  // in deck order
+  EXPECT_EQ(deck.output.probes[0].name, "mid");
+  EXPECT_EQ(deck.output.probes[0].position, (deck::Vector3{0.1, 0.0, 0.3}));
+  EXPECT_EQ(deck.output.probes[1].name, "base");
+  EXPECT_EQ(deck.output.probes[1].position, (deck::Vector3{0.1, 0.0, 0.0}));
   EXPECT_TRUE(deck.warnings.empty());
 }
 
@@ -400,6 +407,7 @@ TEST(TEST_CATEGORY, deck_defaults_fill_what_a_minimal_deck_leaves_out) {
   EXPECT_EQ(deck.output.fields,
             (std::vector<deck::OutputField>{deck::OutputField::Displacement, deck::OutputField::Damage}));
   EXPECT_TRUE(deck.output.history.empty());
+  EXPECT_TRUE(deck.output.probes.empty());
   ASSERT_EQ(deck.warnings.size(), 1u);  // no supports
 
   const Deck implicitDeck = parseDeck(edited(baseDeck, {{"    increments: 10\n", ""}}), "base.yaml");
@@ -623,8 +631,54 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
        "output.fields", {"velocity exists only for the explicit solver"}},
       {"history every zero", {{"    every: 1\n", "    every: 1\n    history-every: 0\n"}}, "output.history-every",
        {"must be >= 1, got 0"}},
+      {"probe given as a number", {{"    every: 1\n", "    every: 1\n    probes: {tip: 3}\n"}}, "output.probes.tip",
+       {"expected a list of numbers like [1, 2.5], got the number 3"}},
+      {"probe with two coordinates", {{"    every: 1\n", "    every: 1\n    probes: {tip: [0.09, 0.03]}\n"}},
+       "output.probes.tip", {"expected 3 numbers [x, y, z], got 2"}},
+      {"probes as a list, not named points", {{"    every: 1\n", "    every: 1\n    probes: [0.09, 0.03, 0]\n"}},
+       "output.probes", {"expected a map", "got a list"}},
+      {"probe name with a comma", {{"    every: 1\n", "    every: 1\n    probes: {'tip,1': [0, 0, 0]}\n"}},
+       "output.probes.tip,1", {"may not hold commas, quotes or line breaks"}},
+      {"probe named like a load point",
+       {{"      type: pressure\n      value: 1.0e6\n",
+         "      type: point-force\n      set: left\n      vector: [0, 0, 1]\n"},
+        {"    every: 1\n", "    every: 1\n    history: [load-points]\n    probes: {push: [0, 0, 0]}\n"}},
+       "output.probes.push", {"would repeat the load-points columns of loads.push; rename the probe"}},
   };
   expectDeckErrors(cases);
+}
+
+TEST(TEST_CATEGORY, deck_probes_snap_to_the_nearest_node_or_name_the_distance) {
+  // The base plate: 0.09 m x 0.03 m in z = 0, spacing 1 mm, nodes on the millimetre grid.
+  auto probesOf = [](const std::string& probes) {
+    const auto model =
+        model::buildModel(parseDeck(edited(baseDeck, {{"    every: 1\n", "    every: 1\n" + probes}}), "bad.yaml"));
+    return std::make_pair(solvers::snapProbes(model), model);
+  };
+  const auto [probes, model] = probesOf("    probes: {tip: [0.0902, 0.0303, 0.0], centre: [0.045, 0.015, 0.0006]}\n");
+  EXPECT_NEAR(solvers::probeReach(model), 1.0e-3, 1e-15);  // the longest edge, to round-off
+  ASSERT_EQ(probes.size(), 2u);
+  const auto& x = model.shell.mesh.coordinates;
+  EXPECT_EQ(probes[0].name, "tip");
+  EXPECT_NEAR(x(probes[0].node, 0), 0.09, 1e-15);  // the top-right corner
+  EXPECT_NEAR(x(probes[0].node, 1), 0.03, 1e-15);
+  EXPECT_NEAR(probes[0].distance, std::hypot(2e-4, 3e-4), 1e-15);
+  EXPECT_EQ(probes[1].name, "centre");
+  EXPECT_NEAR(x(probes[1].node, 0), 0.045, 1e-15);
+  EXPECT_NEAR(x(probes[1].node, 1), 0.015, 1e-15);
+  EXPECT_NEAR(probes[1].distance, 6e-4, 1e-15);
+
+  // 2 mm above the plate: farther than the 1 mm spacing and the 1 mm elements.
+  try {
+    probesOf("    probes: {tip: [0.09, 0.03, 0.0], above: [0.045, 0.015, 0.002]}\n");
+    ADD_FAILURE() << "a probe 2 mm off a plate meshed at 1 mm was accepted";
+  } catch (const DeckError& error) {
+    EXPECT_EQ(error.keyPath(), "output.probes.above");
+    EXPECT_EQ(error.reason(),
+              "the nearest mesh node to [0.045, 0.015, 0.002] m, node 1410 at [0.045, 0.015, 0] m, is 0.002 m away, "
+              "farther than 0.001 m (the larger of mesh.spacing and the longest element edge): a probe must lie on "
+              "the shell");
+  }
 }
 
 TEST(TEST_CATEGORY, deck_yaml_errors_name_the_line) {

@@ -107,6 +107,14 @@ KOKKOS_INLINE_FUNCTION void logarithm(const T R[3][3], T theta[3]) {
   for (int k = 0; k < 3; ++k) theta[k] = scale * axial[k];
 }
 
+// The rotation vector (axis times angle) of the unit quaternion q: what output reports as a
+// node's rotation (fields, history probes).
+KOKKOS_INLINE_FUNCTION void rotationVector(const double q[4], double theta[3]) {
+  double R[3][3];
+  toMatrix(q, R);
+  logarithm(R, theta);
+}
+
 // R(phi) = exp(phi) R to second order in phi: (I + Phi + Phi^2/2) R, Phi = skew(phi). The
 // implicit tangents seed phi with dual numbers at phi = 0, where only the first two
 // derivatives count, so this is exact for them.

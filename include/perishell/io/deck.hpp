@@ -215,6 +215,9 @@ struct Output {
   long long historyEvery = 100;      // steps or increments between history rows; default: every (100 if 0)
   std::vector<OutputField> fields{OutputField::Displacement, OutputField::Damage};
   std::vector<HistoryQuantity> history;
+  // History probes: each point snaps to its nearest mesh node at run start (solvers/history_columns.hpp),
+  // whose displacement and rotation vector are written as columns <name>-ux .. <name>-rz.
+  std::vector<NamedPoint> probes;  // in deck order
 };
 
 // Load factor of a curve at time t (docs/deck.md: ramp t/end-time clamped to [0, 1]; step
