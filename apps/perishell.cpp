@@ -108,7 +108,7 @@ const char* generatorName(perishell::deck::MeshGenerator generator) {
 }
 
 // The model as ParaView shows it: PD nodes and bonds per node (pre-cracks show as a band
-// of nodes with fewer bonds).
+// of nodes with fewer bonds), the support layer included.
 template <class BondListT>
 std::string writeModelOutput(const std::string& directory, const perishell::model::Model& model,
                              const BondListT& bonds) {
@@ -125,6 +125,21 @@ std::string writeModelOutput(const std::string& directory, const perishell::mode
   writer.writeStep(0.0, {perishell::io::makeScalarField("pd-node", pdNode),
                          perishell::io::makeScalarField("bonds", bondCount)});
   return writer.xdmfPath();
+}
+
+// docs/model-setup.md, "Supports on PD regions".
+void printSupportLayer(const perishell::model::Model& model) {
+  if (model.numLayerNodes() > 0) {
+    std::string sets;
+    for (const auto& [set, nodes] : model.supportLayer.nodesOfSet) sets += (sets.empty() ? "" : ", ") + set;
+    std::printf("  %-10s %s nodes, %s quads held beyond the clamped PD edges of %s (peridynamics.support-layer)\n",
+                "layer", withThousands(model.numLayerNodes()).c_str(),
+                withThousands(model.shell.mesh.numElements() - model.numMeshElements()).c_str(), sets.c_str());
+  }
+  for (const auto& set : model.supportLayer.skippedSets)
+    std::printf("  %-10s no support layer beyond set '%s': the mesh goes on beyond each of its free edges (a slit "
+                "or a fold)\n",
+                "layer", set.c_str());
 }
 
 // DECK [--output DIR] for the run and check commands, and the run's options.
@@ -181,11 +196,12 @@ int runCheck(const std::vector<std::string>& args) {
   std::printf("perishell %s: check %s\n", perishell::versionString().c_str(), deckPath.c_str());
   if (!deck.title.empty()) std::printf("  %-10s %s\n", "title", deck.title.c_str());
   std::printf("  %-10s %s, %s nodes, %s quads, spacing %g m\n", "mesh", generatorName(deck.mesh.generator),
-              withThousands(mesh.numNodes()).c_str(), withThousands(mesh.numElements()).c_str(),
+              withThousands(model.numMeshNodes()).c_str(), withThousands(model.numMeshElements()).c_str(),
               model.gridSpacing());
   std::printf("  %-10s %s PD elements of %s: PD ratio %.1f %%; %s PD nodes\n", "zones",
-              withThousands(model.numPdElements).c_str(), withThousands(mesh.numElements()).c_str(),
-              100.0 * model.pdRatio(), withThousands(model.pdNodes.extent(0)).c_str());
+              withThousands(model.numPdElements).c_str(), withThousands(model.numMeshElements()).c_str(),
+              100.0 * model.pdRatio(), withThousands(model.pdNodes.extent(0) - model.numLayerNodes()).c_str());
+  printSupportLayer(model);
   std::printf("  %-10s %s bonds, horizon %g m (%g x spacing), %zu pre-crack(s); built on %s in %.3f s\n",
               "bonds", withThousands(static_cast<long long>(bonds.numBonds())).c_str(), model.horizon(),
               deck.peridynamics.horizonFactor, deck.mesh.preCracks.size(), perishell::ExecutionSpace::name(),
@@ -214,9 +230,9 @@ int runDeck(const std::vector<std::string>& args) {
   for (const auto& warning : deck.warnings) std::printf("  warning: %s\n", warning.c_str());
   const auto model = perishell::model::buildModel(deck);
   std::printf("  %-10s %s nodes, %s quads, PD ratio %.1f %%, %s free DOF\n", "model",
-              withThousands(model.shell.mesh.numNodes()).c_str(),
-              withThousands(model.shell.mesh.numElements()).c_str(), 100.0 * model.pdRatio(),
-              withThousands(model.freeDofCount()).c_str());
+              withThousands(model.numMeshNodes()).c_str(), withThousands(model.numMeshElements()).c_str(),
+              100.0 * model.pdRatio(), withThousands(model.freeDofCount()).c_str());
+  printSupportLayer(model);
   std::fflush(stdout);
   if (deck.solver.type == perishell::deck::SolverType::Explicit)
     perishell::solvers::runExplicit(model, parsed.run, std::cout);

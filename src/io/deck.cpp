@@ -456,7 +456,7 @@ deck::Material readMaterial(const Section& section) {
 }
 
 deck::Peridynamics readPeridynamics(const Section& section) {
-  section.allowOnly({"horizon-factor", "force-kernel"});
+  section.allowOnly({"horizon-factor", "force-kernel", "support-layer"});
   deck::Peridynamics pd;
   pd.horizonFactor = section.number("horizon-factor", pd.horizonFactor);
   if (pd.horizonFactor < 1.0)
@@ -467,6 +467,7 @@ deck::Peridynamics readPeridynamics(const Section& section) {
       "force-kernel",
       {{"bond-scatter", deck::ForceKernel::BondScatter}, {"node-gather", deck::ForceKernel::NodeGather}},
       pd.forceKernel);
+  pd.supportLayer = section.flag("support-layer", pd.supportLayer);
   return pd;
 }
 

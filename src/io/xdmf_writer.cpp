@@ -149,6 +149,11 @@ NodalField scalarFieldFrom(std::string name, const Kokkos::View<const ValueT*, K
 
 }  // namespace
 
+NodalField firstNodes(const NodalField& field, LocalIndex numNodes) {
+  return {field.name, field.components,
+          Kokkos::subview(field.values, std::make_pair(LocalIndex(0), numNodes), Kokkos::ALL)};
+}
+
 NodalField makeScalarField(std::string name, const Kokkos::View<const double*, Kokkos::HostSpace>& values) {
   return scalarFieldFrom(std::move(name), values);
 }

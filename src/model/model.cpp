@@ -1,9 +1,11 @@
 #include <perishell/mesh/generators.hpp>
 #include <perishell/mesh/gmsh_reader.hpp>
+#include <perishell/mesh/node_geometry.hpp>
 #include <perishell/model/model.hpp>
 
 #include <algorithm>
 #include <array>
+#include <map>
 #include <cmath>
 #include <numeric>
 #include <set>
@@ -217,7 +219,53 @@ void checkPreCracksInPd(const Model& model) {
   }
 }
 
+// The supports' sets whose DOFs clamp a PD edge: all three displacements and every rotation
+// but, at most, the drilling one (about the shell normal at each of the set's nodes).
+std::vector<mesh::SupportLayerRequest> clampedSets(const Model& model) {
+  std::map<std::string, std::uint8_t> dofsOfSet;
+  for (const auto& support : model.deck.supports)
+    for (const auto dof : support.dofs) dofsOfSet[support.set] |= std::uint8_t(1u << static_cast<int>(dof));
+  const auto normals = mesh::computeNodeNormals(Kokkos::DefaultHostExecutionSpace{}, model.shell.mesh);
+  std::vector<mesh::SupportLayerRequest> requests;
+  for (const auto& [set, dofs] : dofsOfSet) {
+    if ((dofs & 0b111) != 0b111) continue;
+    auto nodes = model.shell.sets.nodesOfNodeOrEdgeSet(set);
+    bool clamped = true;
+    for (int axis = 0; axis < 3; ++axis) {
+      if (dofs & (1u << (3 + axis))) continue;
+      constexpr double drillingOnly = 1.0 - 1e-6;  // the free rotation axis is the normal
+      for (const LocalIndex node : nodes) clamped = clamped && std::abs(normals(node, axis)) >= drillingOnly;
+    }
+    if (clamped) requests.push_back({set, std::move(nodes)});
+  }
+  return requests;
+}
+
+// docs/model-setup.md, "Supports on PD regions".
+void addSupportLayer(Model& model) {
+  const LocalIndex numElements = model.shell.mesh.numElements();
+  std::vector<std::uint8_t> isPd(model.elementIsPd.data(), model.elementIsPd.data() + numElements);
+  const bool wanted = model.deck.peridynamics.supportLayer && model.numPdElements > 0;
+  model.supportLayer = mesh::addSupportLayer(model.shell.mesh, wanted ? clampedSets(model) : std::vector<mesh::SupportLayerRequest>{},
+                                             isPd, model.horizon(), model.gridSpacing());
+  const LocalIndex numAll = model.shell.mesh.numElements();
+  Kokkos::resize(model.elementIsPd, numAll);
+  for (LocalIndex element = numElements; element < numAll; ++element) model.elementIsPd(element) = 1;
+  std::set<std::pair<LocalIndex, int>> constrained;
+  for (const auto& support : model.deck.supports)
+    for (const LocalIndex node : model.supportNodes(support))
+      for (const auto dof : support.dofs) constrained.insert({node, static_cast<int>(dof)});
+  model.numConstrainedDofs = static_cast<long long>(constrained.size());
+}
+
 }  // namespace
+
+std::vector<LocalIndex> Model::supportNodes(const deck::Support& support) const {
+  auto nodes = shell.sets.nodesOfNodeOrEdgeSet(support.set);
+  const auto layer = supportLayer.nodesOfSet.find(support.set);
+  if (layer != supportLayer.nodesOfSet.end()) nodes.insert(nodes.end(), layer->second.begin(), layer->second.end());
+  return nodes;
+}
 
 Model buildModel(const Deck& deck) {
   Model model;
@@ -226,6 +274,7 @@ Model buildModel(const Deck& deck) {
   addDeckNodeSets(deck, model.shell);
   checkSetReferences(deck, model.shell.sets, model.numConstrainedDofs);
   model.numPdElements = flagPdElements(deck, model.shell, model.elementIsPd);
+  addSupportLayer(model);
 
   const HostQuadMesh& mesh = model.shell.mesh;
   std::vector<std::uint8_t> isPdNode(mesh.numNodes(), 0);

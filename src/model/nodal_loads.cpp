@@ -31,7 +31,7 @@ double norm(const Vector3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2
 
 std::vector<LocalIndex> pressureElements(const Model& model, const deck::Load& load) {
   if (!load.set.empty()) return model.shell.sets.elementSet(load.set);
-  std::vector<LocalIndex> all(model.shell.mesh.numElements());
+  std::vector<LocalIndex> all(model.numMeshElements());  // not the support layer's
   std::iota(all.begin(), all.end(), 0);
   return all;
 }
@@ -250,7 +250,7 @@ SupportConditions buildSupportConditions(const Model& model) {
   const auto& supports = model.deck.supports;
   for (std::size_t s = 0; s < supports.size(); ++s) {
     const Prescription prescription = prescriptionOf(model, supports[s], conditions);
-    for (const LocalIndex node : model.shell.sets.nodesOfNodeOrEdgeSet(supports[s].set))
+    for (const LocalIndex node : model.supportNodes(supports[s]))
       for (const auto dofName : supports[s].dofs) {
         const int dof = static_cast<int>(dofName);
         int& owner = setBy[6 * std::size_t(node) + dof];

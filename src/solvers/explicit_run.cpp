@@ -57,7 +57,7 @@ class RunOutput {
       : model_(model),
         solver_(solver),
         shared_(shared),
-        writer_(createdDirectory(directory), "results", model.shell.mesh),
+        writer_(createdDirectory(directory), "results", model.outputMesh()),
         damage_("pd damage", model.shell.mesh.numNodes()),
         zoneNodes_(model.pdNodes) {
     const auto& deck = model.deck;
@@ -134,6 +134,7 @@ class RunOutput {
         }
       }
     }
+    for (auto& field : fields) field = io::firstNodes(field, model_.numMeshNodes());
     writer_.writeStep(solver_.time(), fields);
     history_->flush();
   }
@@ -208,7 +209,7 @@ class RunOutput {
     const auto& x = model_.shell.mesh.coordinates;
     double farthest = 0.0;
     double tip[3] = {crackOrigin_[0], crackOrigin_[1], crackOrigin_[2]};
-    for (LocalIndex node = 0; node < model_.shell.mesh.numNodes(); ++node) {
+    for (LocalIndex node = 0; node < model_.numMeshNodes(); ++node) {
       if (damage(node) < crackDamage) continue;
       const double distance = std::hypot(x(node, 0) - crackOrigin_[0], x(node, 1) - crackOrigin_[1], x(node, 2) - crackOrigin_[2]);
       if (distance > farthest) {

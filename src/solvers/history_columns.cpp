@@ -33,7 +33,7 @@ std::string formatNode(const model::Model& model, LocalIndex node) {
 double probeReach(const model::Model& model) {
   const auto& mesh = model.shell.mesh;
   double longest = 0.0;
-  for (LocalIndex element = 0; element < mesh.numElements(); ++element)
+  for (LocalIndex element = 0; element < model.numMeshElements(); ++element)
     for (int a = 0; a < 4; ++a) {
       const LocalIndex from = mesh.quads(element, a), to = mesh.quads(element, (a + 1) % 4);
       longest = std::max(longest, std::hypot(mesh.coordinates(to, 0) - mesh.coordinates(from, 0),
@@ -52,7 +52,7 @@ std::vector<SnappedProbe> snapProbes(const model::Model& model) {
   for (const auto& point : deck.output.probes) {
     const auto& p = point.position;
     SnappedProbe probe{point.name, -1, std::numeric_limits<double>::infinity()};
-    for (LocalIndex node = 0; node < model.shell.mesh.numNodes(); ++node) {
+    for (LocalIndex node = 0; node < model.numMeshNodes(); ++node) {  // not the support layer's
       const double distance = std::hypot(x(node, 0) - p[0], x(node, 1) - p[1], x(node, 2) - p[2]);
       if (distance < probe.distance) probe = {point.name, node, distance};
     }
@@ -78,11 +78,10 @@ void printProbes(const model::Model& model, const std::vector<SnappedProbe>& pro
 
 HistoryColumns::HistoryColumns(const model::Model& model) : model_(&model), probes_(snapProbes(model)) {
   const auto& supports = model.deck.supports;
-  const auto& sets = model.shell.sets;
   // How many supports prescribe each translational node DOF.
   std::vector<int> owners(3 * static_cast<std::size_t>(model.shell.mesh.numNodes()), 0);
   auto eachDof = [&](const deck::Support& support, auto&& visit) {
-    for (const LocalIndex node : sets.nodesOfNodeOrEdgeSet(support.set))
+    for (const LocalIndex node : model.supportNodes(support))  // the support layer's too
       for (const auto dof : support.dofs)
         if (static_cast<int>(dof) < 3) visit(node, static_cast<int>(dof));
   };

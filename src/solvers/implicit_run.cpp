@@ -43,7 +43,7 @@ class ImplicitOutput {
   ImplicitOutput(const model::Model& model, const std::string& directory, const Solver& solver,
                  const HistoryColumns& shared)
       : model_(model), solver_(solver), shared_(shared),
-        writer_((std::filesystem::create_directories(directory), directory), "results", model.shell.mesh) {
+        writer_((std::filesystem::create_directories(directory), directory), "results", model.outputMesh()) {
     std::vector<std::string> columns = {"increment", "load-factor", "newton-iterations", "linear-iterations", "cuts",
                                         "relative-residual", "max-displacement"};
     auto add = [&columns](const std::vector<std::string>& more) {
@@ -82,6 +82,7 @@ class ImplicitOutput {
         case deck::OutputField::Velocity: break;  // rejected for implicit decks by the deck reader
       }
     }
+    for (auto& field : fields) field = io::firstNodes(field, model_.numMeshNodes());
     writer_.writeStep(solver_.loadFactor(), fields);
     history_->flush();
   }
@@ -90,7 +91,7 @@ class ImplicitOutput {
   double appendHistory(int increment, const IncrementReport& report) {
     const auto u = displacements();
     double maxDisplacement = 0.0;
-    for (LocalIndex node = 0; node < model_.shell.mesh.numNodes(); ++node)
+    for (LocalIndex node = 0; node < model_.numMeshNodes(); ++node)
       maxDisplacement = std::max(maxDisplacement, std::hypot(u(node, 0), u(node, 1), u(node, 2)));
     std::vector<double> row = {double(increment), report.loadFactor, double(report.newtonIterations),
                                double(report.linearIterations), double(report.cuts), report.relativeResidual,

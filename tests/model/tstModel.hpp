@@ -61,15 +61,20 @@ std::size_t latticeBondCount(int nx, int ny) {
 TEST(TEST_CATEGORY, model_all_pd_plate_counts_dofs_and_bonds) {
   const auto model = build(plateDeck("    default: pd\n", "",
                                      "  supports:\n    clamp: {set: left, dofs: [ux, uy, uz, rx, ry, rz]}\n"));
-  EXPECT_EQ(model.shell.mesh.numElements(), 200);
+  EXPECT_EQ(model.numMeshElements(), 200);
   EXPECT_EQ(model.numPdElements, 200);
   EXPECT_DOUBLE_EQ(model.pdRatio(), 1.0);
-  EXPECT_EQ(model.pdNodes.extent(0), 231u);
-  EXPECT_EQ(model.numConstrainedDofs, 11 * 6);
+  // The clamp's support layer: three columns of 11 nodes and 10 quads beyond x = 0, all held.
+  EXPECT_EQ(model.numMeshNodes(), 231);
+  EXPECT_EQ(model.numLayerNodes(), 33);
+  EXPECT_EQ(model.shell.mesh.numElements(), 230);
+  EXPECT_EQ(model.pdNodes.extent(0), 231u + 33u);
+  EXPECT_EQ(model.numConstrainedDofs, (11 + 33) * 6);
   EXPECT_EQ(model.paperDofCount(), 200 * 24);
   EXPECT_EQ(model.freeDofCount(), 231 * 6 - 66);
   EXPECT_DOUBLE_EQ(model.horizon(), 3.0e-3);
-  EXPECT_EQ(bondCount<TEST_EXECSPACE>(model), latticeBondCount(21, 11));
+  // The 24-column lattice without the pairs inside the layer (both ends held).
+  EXPECT_EQ(bondCount<TEST_EXECSPACE>(model), latticeBondCount(24, 11) - latticeBondCount(3, 11));
 }
 
 TEST(TEST_CATEGORY, model_pd_box_flags_elements_by_centroid) {

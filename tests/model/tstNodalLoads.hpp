@@ -305,8 +305,9 @@ TEST(TEST_CATEGORY, nodal_loads_support_masks_values_and_curves) {
       "    ramp: {type: ramp, end-time: 1.0}\n"
       "    late: {type: step, time: 0.5}\n"));
   const auto supports = perishell::model::buildSupportConditions(model);
-  // left 11 x 6, bottom 20 more uy, right 11 ux, one uz at the top-right corner.
-  EXPECT_EQ(supports.numConstrainedDofs(), 66 + 20 + 11 + 1);
+  // left 11 x 6 and its support layer (3 columns of 11) x 6, bottom 20 more uy, right 11 ux,
+  // one uz at the top-right corner.
+  EXPECT_EQ(supports.numConstrainedDofs(), 66 + 198 + 20 + 11 + 1);
   EXPECT_EQ(supports.numConstrainedDofs(), model.numConstrainedDofs);
   EXPECT_EQ(supports.constrainedDofs(plateNode(0, 0)), 0x3F);
   EXPECT_EQ(supports.constrainedDofs(plateNode(0, 7)), 0x3F);

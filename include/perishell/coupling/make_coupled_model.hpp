@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -63,6 +64,7 @@ struct CouplingInputs {
   double gridSpacing = 0.0;  // dx [m]
   std::vector<mesh::CrackSegment> preCracks;
   deck::Transition transition;  // width 0: 2 delta
+  LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max();  // the support layer's first node
 };
 
 // elementIsPd: per mesh element, 1 where PD (model.md §1). Throws std::invalid_argument on
@@ -110,7 +112,7 @@ CoupledBodies<typename ExecutionSpaceT::memory_space> makeCoupledBodies(
   // No bond carrier (0 % PD): an empty body, and no microbeam checks (a pure CCM model may have nu > 1/3).
   if (numBodyNodes > 0)
     bodies.pdBody = pd::makePdBody(space, hostMesh, bodies.pdNodes, inputs.material, inputs.horizon,
-                                   inputs.gridSpacing, inputs.preCracks, atCcmInterface);
+                                   inputs.gridSpacing, inputs.preCracks, atCcmInterface, inputs.firstHeldNode);
   else
     bodies.pdBody = emptyPdBody<MemorySpaceT>();
 
@@ -158,6 +160,7 @@ inline CouplingInputs couplingInputs(const model::Model& model) {
   inputs.gridSpacing = model.gridSpacing();
   inputs.preCracks = model.preCrackSegments();
   inputs.transition = model.deck.zones.transition;
+  inputs.firstHeldNode = model.supportLayer.firstNode;
   return inputs;
 }
 

@@ -76,6 +76,8 @@ enum class ForceKernel { BondScatter, NodeGather };
 struct Peridynamics {
   double horizonFactor = 3.0;  // m = δ/Δx
   ForceKernel forceKernel = ForceKernel::NodeGather;
+  // Clamped edges of PD regions get a held layer one horizon wide (mesh/support_layer.hpp).
+  bool supportLayer = true;
 };
 
 enum class ZoneKind { Pd, Ccm };

@@ -41,6 +41,9 @@ NodalField makeScalarField(std::string name, const Kokkos::View<const int*, Kokk
 NodalField makeRotationVectorField(
     std::string name, const Kokkos::View<const double* [4], Kokkos::LayoutRight, Kokkos::HostSpace>& quaternions);
 
+// The field on its first numNodes nodes (a model's own mesh, without its support layer).
+NodalField firstNodes(const NodalField& field, LocalIndex numNodes);
+
 class XdmfTimeSeriesWriter {
  public:
   // The directory must exist. baseName follows the field-name rule. Throws

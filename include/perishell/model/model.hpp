@@ -5,8 +5,10 @@
 // at setup; buildPdBonds moves the PD nodes to the device and builds their bonds there.
 #include <perishell/io/deck.hpp>
 #include <perishell/mesh/mesh_sets.hpp>
+#include <perishell/mesh/support_layer.hpp>
 #include <perishell/pd/make_body.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -14,11 +16,13 @@ namespace perishell::model {
 
 struct Model {
   Deck deck;
+  // The mesh with the support layer appended (its nodes and elements after the deck's own).
   mesh::ShellMesh shell;
+  mesh::SupportLayer supportLayer;
   // 1 where the element is PD, 0 where it is CCM (model.md §1).
   Kokkos::View<std::uint8_t*, Kokkos::HostSpace> elementIsPd;
   LocalIndex numPdElements = 0;
-  // Nodes of PD elements, ascending: the nodes that carry bonds.
+  // Nodes of PD elements, ascending: the nodes that carry bonds (the support layer's too).
   Kokkos::View<LocalIndex*, Kokkos::HostSpace> pdNodes;
   // Distinct (node, DOF) pairs that supports prescribe.
   long long numConstrainedDofs = 0;
@@ -30,13 +34,21 @@ struct Model {
     for (const auto& crack : deck.mesh.preCracks) cracks.push_back(crack.segment);
     return cracks;
   }
-  // The paper's "PD element ratio": PD elements / all elements.
-  double pdRatio() const {
-    return shell.mesh.numElements() > 0 ? double(numPdElements) / shell.mesh.numElements() : 0.0;
+  // The deck's own mesh, without the support layer: what results are written on.
+  LocalIndex numMeshNodes() const { return std::min(supportLayer.firstNode, shell.mesh.numNodes()); }
+  LocalIndex numMeshElements() const { return std::min(supportLayer.firstElement, shell.mesh.numElements()); }
+  mesh::HostQuadMesh outputMesh() const {
+    return {Kokkos::subview(shell.mesh.coordinates, std::make_pair(LocalIndex(0), numMeshNodes()), Kokkos::ALL),
+            Kokkos::subview(shell.mesh.quads, std::make_pair(LocalIndex(0), numMeshElements()), Kokkos::ALL)};
   }
+  LocalIndex numLayerNodes() const { return shell.mesh.numNodes() - numMeshNodes(); }
+  // The nodes a support holds: its set's, and the support layer's beyond the set's edges.
+  std::vector<LocalIndex> supportNodes(const deck::Support& support) const;
+  // The paper's "PD element ratio": PD elements / all elements (of the deck's mesh).
+  double pdRatio() const { return numMeshElements() > 0 ? double(numPdElements) / numMeshElements() : 0.0; }
   // The paper counts elements x 4 nodes x 6 DOF (model.md §7); the true count is
   // 6 per node less the prescribed ones.
-  long long paperDofCount() const { return 24LL * shell.mesh.numElements(); }
+  long long paperDofCount() const { return 24LL * numMeshElements(); }
   long long freeDofCount() const { return 6LL * shell.mesh.numNodes() - numConstrainedDofs; }
 };
 
@@ -50,7 +62,7 @@ template <class ExecutionSpaceT>
 pd::BondList<typename ExecutionSpaceT::memory_space> buildPdBonds(const ExecutionSpaceT& space,
                                                                   const Model& model) {
   return pd::buildBondsAmong(space, model.shell.mesh, model.pdNodes, model.horizon(), model.gridSpacing(),
-                             model.preCrackSegments())
+                             model.preCrackSegments(), model.numMeshNodes())
       .bonds;
 }
 

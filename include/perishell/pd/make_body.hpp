@@ -8,7 +8,9 @@
 #include <perishell/core/rotation.hpp>
 #include <perishell/pd/pd_body.hpp>
 
+#include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -221,8 +223,8 @@ void computeStiffnessScales(const ExecutionSpaceT& space, PdBody<MemorySpaceT>& 
 }
 
 // The chosen nodes' reference positions on the device and the bonds among them (device
-// neighbour search, pre-cracks cut). pdNodes: mesh node indices, ascending; node k of the
-// result is mesh node pdNodes(k).
+// neighbour search, pre-cracks cut, none between two mesh nodes from firstHeldNode on).
+// pdNodes: mesh node indices, ascending; node k of the result is mesh node pdNodes(k).
 template <class MemorySpaceT>
 struct PdNodeBonds {
   CoordinateView<MemorySpaceT> positions;
@@ -233,10 +235,13 @@ template <class ExecutionSpaceT>
 PdNodeBonds<typename ExecutionSpaceT::memory_space> buildBondsAmong(
     const ExecutionSpaceT& space, const mesh::HostQuadMesh& hostMesh,
     const Kokkos::View<const LocalIndex*, Kokkos::HostSpace>& pdNodes, double horizon, double gridSpacing,
-    const std::vector<mesh::CrackSegment>& preCracks) {
+    const std::vector<mesh::CrackSegment>& preCracks, LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max()) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   using MemorySpaceT = typename ExecutionSpaceT::memory_space;
   const LocalIndex numPdNodes = static_cast<LocalIndex>(pdNodes.extent(0));
+  // pdNodes ascends, so the held ones are its tail.
+  const LocalIndex firstHeld = static_cast<LocalIndex>(
+      std::lower_bound(pdNodes.data(), pdNodes.data() + numPdNodes, firstHeldNode) - pdNodes.data());
   CoordinateView<Kokkos::HostSpace> hostPositions("pd node positions", numPdNodes);
   for (LocalIndex k = 0; k < numPdNodes; ++k)
     for (int d = 0; d < 3; ++d) hostPositions(k, d) = hostMesh.coordinates(pdNodes(k), d);
@@ -245,7 +250,8 @@ PdNodeBonds<typename ExecutionSpaceT::memory_space> buildBondsAmong(
   PdNodeBonds<MemorySpaceT> result;
   result.positions = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostPositions);
   const auto cracks = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostCracks);
-  result.bonds = buildBondList(space, result.positions, horizon, gridSpacing, cracks);
+  result.bonds = buildBondList(space, result.positions, horizon, gridSpacing, cracks,
+                               firstHeld < numPdNodes ? firstHeld : std::numeric_limits<LocalIndex>::max());
   return result;
 }
 
@@ -257,7 +263,8 @@ PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
     const ExecutionSpaceT& space, const mesh::HostQuadMesh& hostMesh,
     const Kokkos::View<const LocalIndex*, Kokkos::HostSpace>& pdNodes, const PdMaterial& material, double horizon,
     double gridSpacing, const std::vector<mesh::CrackSegment>& preCracks,
-    const Kokkos::View<const std::uint8_t*, Kokkos::HostSpace>& nodesAtCcmInterface = {}) {
+    const Kokkos::View<const std::uint8_t*, Kokkos::HostSpace>& nodesAtCcmInterface = {},
+    LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max()) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   using MemorySpaceT = typename ExecutionSpaceT::memory_space;
   PdBody<MemorySpaceT> body;
@@ -265,7 +272,7 @@ PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
   if (material.fractureEnergy)
     body.criticalMicropotentialPerLength =
         criticalMicropotentialPerLength(*material.fractureEnergy, material.thickness, horizon);
-  auto nodeBonds = buildBondsAmong(space, hostMesh, pdNodes, horizon, gridSpacing, preCracks);
+  auto nodeBonds = buildBondsAmong(space, hostMesh, pdNodes, horizon, gridSpacing, preCracks, firstHeldNode);
   body.referencePositions = nodeBonds.positions;
   body.bonds = nodeBonds.bonds;
 
@@ -285,8 +292,10 @@ PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
         for (int d = 0; d < 3; ++d) normals(k, d) = allNormals(nodes(k), d);
         volumes(k) = allVolumes(nodes(k));
       });
+  // The node weights see every neighbour, the held layer's among themselves too.
   std::optional<BondList<MemorySpaceT>> uncutBonds;
-  if (!preCracks.empty())
+  const bool anyHeld = pdNodes.extent(0) > 0 && pdNodes(pdNodes.extent(0) - 1) >= firstHeldNode;
+  if (!preCracks.empty() || anyHeld)
     uncutBonds = buildBondList(space, body.referencePositions, horizon, gridSpacing,
                                Kokkos::View<const mesh::CrackSegment*, MemorySpaceT>());
   computeStiffnessScales(space, body, horizon, material.thickness,

@@ -1,6 +1,7 @@
 #pragma once
 // Builds the PD bond list on the device in O(N) for bounded node density (model.md §1):
-// bonds join nodes i != j with |X_j - X_i| <= delta, except those crossing a pre-crack.
+// bonds join nodes i != j with |X_j - X_i| <= delta, except those crossing a pre-crack and
+// those between two nodes of a support layer (both held: such a bond never acts).
 // A uniform cell grid (cells >= delta) bins the nodes (count, scan, fill); each node then
 // visits the 27 cells around it twice: once to count its neighbours, once, after a scan to
 // row offsets, to write and sort them. The half list and fullToHalf follow from the sorted
@@ -13,6 +14,7 @@
 #include <perishell/pd/detail/crack_crossing.hpp>
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -86,6 +88,7 @@ struct CellNeighbourSearch {
   Kokkos::View<LocalIndex*, MemorySpaceT> cellNodes;
   Kokkos::View<const mesh::CrackSegment*, MemorySpaceT> cracks;
   double radiusSquared;
+  LocalIndex firstHeldNode;  // nodes from here on are a support layer's
 
   KOKKOS_INLINE_FUNCTION bool crossesAnyCrack(const LocalIndex i, const LocalIndex j) const {
     const LocalIndex first = i < j ? i : j, second = i < j ? j : i;
@@ -115,6 +118,7 @@ struct CellNeighbourSearch {
             if (j == i) continue;
             const double dx = positions(j, 0) - x[0], dy = positions(j, 1) - x[1], dz = positions(j, 2) - x[2];
             if (dx * dx + dy * dy + dz * dz > radiusSquared) continue;
+            if (i >= firstHeldNode && j >= firstHeldNode) continue;
             if (crossesAnyCrack(i, j)) continue;
             visit(j);
           }
@@ -125,7 +129,8 @@ struct CellNeighbourSearch {
 template <class ExecutionSpaceT, class MemorySpaceT>
 CellNeighbourSearch<MemorySpaceT> binNodes(const ExecutionSpaceT& space, const CoordinateView<MemorySpaceT>& positions,
                                            const BoundingBox& box, const double radius,
-                                           const Kokkos::View<const mesh::CrackSegment*, MemorySpaceT>& cracks) {
+                                           const Kokkos::View<const mesh::CrackSegment*, MemorySpaceT>& cracks,
+                                           const LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max()) {
   using Policy = Kokkos::RangePolicy<ExecutionSpaceT>;
   const LocalIndex numNodes = static_cast<LocalIndex>(positions.extent(0));
   const CellGrid grid = makeCellGrid(box, radius, numNodes);
@@ -147,21 +152,23 @@ CellNeighbourSearch<MemorySpaceT> binNodes(const ExecutionSpaceT& space, const C
         const int cell = grid.cellOf(positions(node, 0), positions(node, 1), positions(node, 2));
         cellNodes(cellOffsets(cell) + Kokkos::atomic_fetch_add(&cellFill(cell), 1)) = node;
       });
-  return {positions, grid, cellOffsets, cellNodes, cracks, radius * radius};
+  return {positions, grid, cellOffsets, cellNodes, cracks, radius * radius, firstHeldNode};
 }
 
 }  // namespace detail
 
 // The bonds of the nodes `positions` for horizon delta = `horizon` [m] on a grid of spacing
 // dx = `gridSpacing` [m] (used for the partial-volume factor), without bonds that cross
-// `cracks` (rule: mesh/crack_segment.hpp). Throws std::invalid_argument for a horizon or
+// `cracks` (rule: mesh/crack_segment.hpp) and those between two nodes from firstHeldNode on
+// (a support layer, mesh/support_layer.hpp). Throws std::invalid_argument for a horizon or
 // spacing that is not positive and finite, a horizon below the spacing, or non-finite
 // positions. No nodes give an empty list.
 template <class ExecutionSpaceT, class MemorySpaceT>
 BondList<MemorySpaceT> buildBondList(
     const ExecutionSpaceT& space, const CoordinateView<MemorySpaceT>& positions, const double horizon,
     const double gridSpacing,
-    const Kokkos::View<const mesh::CrackSegment*, typename detail::NonDeduced<MemorySpaceT>::type>& cracks) {
+    const Kokkos::View<const mesh::CrackSegment*, typename detail::NonDeduced<MemorySpaceT>::type>& cracks,
+    const LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max()) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   static_assert(Kokkos::SpaceAccessibility<ExecutionSpaceT, MemorySpaceT>::accessible,
                 "buildBondList: the positions must be accessible from the execution space");
@@ -190,7 +197,7 @@ BondList<MemorySpaceT> buildBondList(
     if (!std::isfinite(box.upper[d] - box.lower[d]))
       throw std::invalid_argument("buildBondList: positions: the nodes' bounding box is too large to represent");
   const double radius = horizon * (1.0 + detail::relativeHorizonTolerance);
-  const auto search = detail::binNodes(space, positions, box, radius, cracks);
+  const auto search = detail::binNodes(space, positions, box, radius, cracks, firstHeldNode);
 
   // Full list: count, scan to row offsets, fill and sort each row.
   Kokkos::View<LocalIndex*, MemorySpaceT> rowCounts(
