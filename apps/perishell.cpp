@@ -127,8 +127,16 @@ std::string writeModelOutput(const std::string& directory, const perishell::mode
   return writer.xdmfPath();
 }
 
-// docs/model-setup.md, "Supports on PD regions".
-void printSupportLayer(const perishell::model::Model& model) {
+// docs/model-setup.md, "Slits" and "Supports on PD regions".
+void printMeshNotes(const perishell::model::Model& model) {
+  if (model.numCoincidentPairs > 0) {
+    const auto [first, second] = model.firstCoincidentPair;
+    const auto& x = model.shell.mesh.coordinates;
+    std::printf("  %-10s %s pair(s) of distinct nodes at one point, e.g. nodes %d and %d at (%g, %g, %g): the mesh "
+                "does not connect them (a slit, or a seam left unmerged), so neither elements nor bonds do\n",
+                "note", withThousands(model.numCoincidentPairs).c_str(), static_cast<int>(first),
+                static_cast<int>(second), x(first, 0), x(first, 1), x(first, 2));
+  }
   if (model.numLayerNodes() > 0) {
     std::string sets;
     for (const auto& [set, nodes] : model.supportLayer.nodesOfSet) sets += (sets.empty() ? "" : ", ") + set;
@@ -201,7 +209,7 @@ int runCheck(const std::vector<std::string>& args) {
   std::printf("  %-10s %s PD elements of %s: PD ratio %.1f %%; %s PD nodes\n", "zones",
               withThousands(model.numPdElements).c_str(), withThousands(model.numMeshElements()).c_str(),
               100.0 * model.pdRatio(), withThousands(model.pdNodes.extent(0) - model.numLayerNodes()).c_str());
-  printSupportLayer(model);
+  printMeshNotes(model);
   std::printf("  %-10s %s bonds, horizon %g m (%g x spacing), %zu pre-crack(s); built on %s in %.3f s\n",
               "bonds", withThousands(static_cast<long long>(bonds.numBonds())).c_str(), model.horizon(),
               deck.peridynamics.horizonFactor, deck.mesh.preCracks.size(), perishell::ExecutionSpace::name(),
@@ -232,7 +240,7 @@ int runDeck(const std::vector<std::string>& args) {
   std::printf("  %-10s %s nodes, %s quads, PD ratio %.1f %%, %s free DOF\n", "model",
               withThousands(model.numMeshNodes()).c_str(), withThousands(model.numMeshElements()).c_str(),
               100.0 * model.pdRatio(), withThousands(model.freeDofCount()).c_str());
-  printSupportLayer(model);
+  printMeshNotes(model);
   std::fflush(stdout);
   if (deck.solver.type == perishell::deck::SolverType::Explicit)
     perishell::solvers::runExplicit(model, parsed.run, std::cout);

@@ -1,3 +1,4 @@
+#include <perishell/mesh/free_edges.hpp>
 #include <perishell/mesh/support_layer.hpp>
 
 #include <algorithm>
@@ -12,7 +13,7 @@ namespace perishell::mesh {
 
 namespace {
 
-using Point = std::array<double, 3>;
+using Point = Point3;
 
 Point operator-(const Point& a, const Point& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
 Point operator+(const Point& a, const Point& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
@@ -23,47 +24,6 @@ Point cross(const Point& a, const Point& b) {
 }
 Point unit(const Point& a) { return (1.0 / std::sqrt(dot(a, a))) * a; }
 
-// Uniform hash grid of points, for nearest-point and neighbourhood queries at setup.
-class PointGrid {
- public:
-  explicit PointGrid(double cell) : cell_(cell) {}
-
-  void insert(const Point& p, LocalIndex id) { cells_[key(cellOf(p))].push_back(id); }
-
-  // Calls visit(id) for every point in the cells that the box [lower, upper] touches.
-  template <class Visit>
-  void forEachIn(const Point& lower, const Point& upper, Visit&& visit) const {
-    const auto low = cellOf(lower), high = cellOf(upper);
-    for (long long i = low[0]; i <= high[0]; ++i)
-      for (long long j = low[1]; j <= high[1]; ++j)
-        for (long long k = low[2]; k <= high[2]; ++k) {
-          const auto found = cells_.find(key({i, j, k}));
-          if (found == cells_.end()) continue;
-          for (const LocalIndex id : found->second) visit(id);
-        }
-  }
-
- private:
-  std::array<long long, 3> cellOf(const Point& p) const {
-    return {std::llround(std::floor(p[0] / cell_)), std::llround(std::floor(p[1] / cell_)),
-            std::llround(std::floor(p[2] / cell_))};
-  }
-  static long long key(const std::array<long long, 3>& c) {
-    const long long mask = (1LL << 21) - 1;
-    return ((c[0] & mask) << 42) | ((c[1] & mask) << 21) | (c[2] & mask);
-  }
-  double cell_;
-  std::unordered_map<long long, std::vector<LocalIndex>> cells_;
-};
-
-// A free edge of the mesh as its element traverses it, with the in-plane unit normal m
-// pointing away from the element: x -> x - 2 ((x - a).m) m mirrors across its line.
-struct FreeEdge {
-  LocalIndex a, b, element;
-  Point origin, tangent, outward, normal;
-  double length;
-};
-
 class LayerBuilder {
  public:
   LayerBuilder(HostQuadMesh& mesh, const std::vector<std::uint8_t>& mayMirror, double depth, double spacing)
@@ -71,14 +31,14 @@ class LayerBuilder {
         depth_(depth),
         tolerance_(0.25 * spacing),
         firstNode_(mesh.numNodes()),
-        realNodes_(spacing),
+        realNodes_(makeNodeGrid(mesh, spacing)),
         centroidGrid_(depth) {
     if (!(depth > 0.0 && spacing > 0.0 && std::isfinite(depth) && std::isfinite(spacing)))
       throw std::invalid_argument("support layer: depth and spacing must be positive and finite");
     if (mayMirror.size() != static_cast<std::size_t>(mesh.numElements()))
       throw std::invalid_argument("support layer: the element mask has " + std::to_string(mayMirror.size()) +
                                   " entries for " + std::to_string(mesh.numElements()) + " elements");
-    findFreeEdges();
+    freeEdges_ = findFreeEdges(mesh);
     for (LocalIndex e = 0; e < mesh.numElements(); ++e) {
       double diameter = 0.0;
       for (int k = 0; k < 4; ++k)
@@ -87,7 +47,6 @@ class LayerBuilder {
       largestDiameter_ = std::max(largestDiameter_, diameter);
       if (mayMirror[e]) centroidGrid_.insert(centroid(e), e);
     }
-    for (LocalIndex n = 0; n < mesh.numNodes(); ++n) realNodes_.insert(node(n), n);
   }
 
   struct Built {
@@ -102,7 +61,7 @@ class LayerBuilder {
         if (setOf[n] < 0) setOf[n] = static_cast<int>(r);
     std::vector<Built> result(requests.size());
     // Images may merge with the sets' own nodes (those on a mirror line map onto themselves).
-    PointGrid targets(2.0 * tolerance_);
+    NodeGrid targets(2.0 * tolerance_);
     std::vector<LocalIndex> targetIds;
     const auto addTarget = [&](const Point& p, LocalIndex id) {
       targets.insert(p, static_cast<LocalIndex>(targetIds.size()));
@@ -127,7 +86,7 @@ class LayerBuilder {
           owner = static_cast<int>(r);
       if (owner < 0) continue;
       result[owner].hasFreeEdges = true;
-      if (materialBeyond(edge)) continue;
+      if (materialBeyond(mesh_, realNodes_, edge, depth_)) continue;
       edges.push_back({&edge, owner});
       result[owner].hasRoom = true;
     }
@@ -234,51 +193,15 @@ class LayerBuilder {
   }
 
  private:
-  Point node(LocalIndex n) const { return {mesh_.coordinates(n, 0), mesh_.coordinates(n, 1), mesh_.coordinates(n, 2)}; }
+  Point node(LocalIndex n) const { return nodePoint(mesh_, n); }
   LocalIndex numLayerNodes() const { return static_cast<LocalIndex>(coordinates_.size() / 3); }
   Point layerNode(LocalIndex n) const {
     const std::size_t k = 3 * static_cast<std::size_t>(n - firstNode_);
     return {coordinates_[k], coordinates_[k + 1], coordinates_[k + 2]};
   }
-  Point centroid(LocalIndex e) const {
-    Point c{0.0, 0.0, 0.0};
-    for (int k = 0; k < 4; ++k) c = c + 0.25 * node(mesh_.quads(e, k));
-    return c;
-  }
+  Point centroid(LocalIndex e) const { return elementCentroid(mesh_, e); }
   static Point mirror(const FreeEdge& edge, const Point& p) {
     return p - (2.0 * dot(p - edge.origin, edge.outward)) * edge.outward;
-  }
-
-  void findFreeEdges() {
-    std::unordered_map<unsigned long long, std::pair<int, FreeEdge>> edges;
-    for (LocalIndex e = 0; e < mesh_.numElements(); ++e)
-      for (int k = 0; k < 4; ++k) {
-        const LocalIndex a = mesh_.quads(e, k), b = mesh_.quads(e, (k + 1) % 4);
-        const auto key = (static_cast<unsigned long long>(std::min(a, b)) << 32) | unsigned(std::max(a, b));
-        auto& entry = edges[key];
-        ++entry.first;
-        entry.second.a = a;
-        entry.second.b = b;
-        entry.second.element = e;
-      }
-    for (auto& [key, entry] : edges) {
-      if (entry.first != 1) continue;
-      FreeEdge edge = entry.second;
-      const LocalIndex e = edge.element;
-      edge.origin = node(edge.a);
-      const Point along = node(edge.b) - edge.origin;
-      edge.length = std::sqrt(dot(along, along));
-      if (!(edge.length > 0.0)) continue;
-      edge.tangent = (1.0 / edge.length) * along;
-      edge.normal = unit(cross(node(mesh_.quads(e, 2)) - node(mesh_.quads(e, 0)),
-                               node(mesh_.quads(e, 3)) - node(mesh_.quads(e, 1))));
-      edge.outward = unit(cross(edge.tangent, edge.normal));
-      if (dot(centroid(e) - edge.origin, edge.outward) > 0.0) edge.outward = -1.0 * edge.outward;
-      freeEdges_.push_back(edge);
-    }
-    // Hash order must not decide node numbering.
-    std::sort(freeEdges_.begin(), freeEdges_.end(),
-              [](const FreeEdge& x, const FreeEdge& y) { return std::make_pair(x.a, x.b) < std::make_pair(y.a, y.b); });
   }
 
   // Position of p along the edge (0 at a, 1 at b), its depth inside (> 0 on the element's
@@ -289,25 +212,6 @@ class LayerBuilder {
   static Local local(const FreeEdge& edge, const Point& p) {
     const Point r = p - edge.origin;
     return {dot(r, edge.tangent) / edge.length, -dot(r, edge.outward), std::abs(dot(r, edge.normal))};
-  }
-
-  // Mesh nodes beyond the edge within the layer's depth: the material goes on (a slit whose
-  // other face is meshed, a fold), and a layer there would overlap it.
-  bool materialBeyond(const FreeEdge& edge) const {
-    bool found = false;
-    const Point end = node(edge.b);
-    Point lower, upper;
-    for (int d = 0; d < 3; ++d) {
-      lower[d] = std::min(edge.origin[d], end[d]) - depth_;
-      upper[d] = std::max(edge.origin[d], end[d]) + depth_;
-    }
-    realNodes_.forEachIn(lower, upper, [&](LocalIndex n) {
-      const Local l = local(edge, node(n));
-      if (l.along >= -1e-9 && l.along <= 1.0 + 1e-9 && l.inside < -0.25 * edge.length && l.inside >= -depth_ &&
-          l.offPlane < 0.5 * depth_)
-        found = true;
-    });
-    return found;
   }
 
   // Calls visit(element) for the mirrorable elements whose centroids lie inside the edge's
@@ -339,7 +243,7 @@ class LayerBuilder {
   double depth_, tolerance_;
   LocalIndex firstNode_;
   double largestDiameter_ = 0.0;
-  PointGrid realNodes_, centroidGrid_;
+  NodeGrid realNodes_, centroidGrid_;
   std::vector<FreeEdge> freeEdges_;
   std::vector<double> coordinates_;                // new layer nodes, x y z each
   std::vector<std::array<LocalIndex, 4>> quads_;  // layer elements

@@ -1,4 +1,5 @@
 #include <perishell/mesh/generators.hpp>
+#include <perishell/mesh/free_edges.hpp>
 #include <perishell/mesh/gmsh_reader.hpp>
 #include <perishell/mesh/node_geometry.hpp>
 #include <perishell/model/model.hpp>
@@ -39,16 +40,8 @@ mesh::ShellMesh buildMesh(const Deck& deck) {
   fail(deck, "mesh.generator", "unknown generator");
 }
 
-Vector3 nodePosition(const HostQuadMesh& mesh, LocalIndex node) {
-  return {mesh.coordinates(node, 0), mesh.coordinates(node, 1), mesh.coordinates(node, 2)};
-}
-
-Vector3 elementCentroid(const HostQuadMesh& mesh, LocalIndex element) {
-  Vector3 centroid{0.0, 0.0, 0.0};
-  for (int a = 0; a < 4; ++a)
-    for (int d = 0; d < 3; ++d) centroid[d] += 0.25 * mesh.coordinates(mesh.quads(element, a), d);
-  return centroid;
-}
+Vector3 nodePosition(const HostQuadMesh& mesh, LocalIndex node) { return mesh::nodePoint(mesh, node); }
+using mesh::elementCentroid;
 
 bool inBox(const Vector3& p, const Vector3& min, const Vector3& max) {
   for (int d = 0; d < 3; ++d)
@@ -241,6 +234,23 @@ std::vector<mesh::SupportLayerRequest> clampedSets(const Model& model) {
   return requests;
 }
 
+// Distinct nodes at one point: the mesh leaves them unconnected on purpose (a slit) or by
+// mistake (a seam Gmsh did not merge); `check` and `run` say so either way.
+void findCoincidentNodes(Model& model) {
+  const HostQuadMesh& mesh = model.shell.mesh;
+  const double tolerance = 1e-6 * model.gridSpacing();
+  const auto grid = mesh::makeNodeGrid(mesh, model.gridSpacing());
+  for (LocalIndex node = 0; node < mesh.numNodes(); ++node) {
+    const Vector3 x = nodePosition(mesh, node);
+    grid.forEachIn({x[0] - tolerance, x[1] - tolerance, x[2] - tolerance},
+                   {x[0] + tolerance, x[1] + tolerance, x[2] + tolerance}, [&](LocalIndex other) {
+                     if (other <= node || distanceSquared(x, nodePosition(mesh, other)) > tolerance * tolerance)
+                       return;
+                     if (model.numCoincidentPairs++ == 0) model.firstCoincidentPair = {node, other};
+                   });
+  }
+}
+
 // docs/model-setup.md, "Supports on PD regions".
 void addSupportLayer(Model& model) {
   const LocalIndex numElements = model.shell.mesh.numElements();
@@ -274,6 +284,7 @@ Model buildModel(const Deck& deck) {
   addDeckNodeSets(deck, model.shell);
   checkSetReferences(deck, model.shell.sets, model.numConstrainedDofs);
   model.numPdElements = flagPdElements(deck, model.shell, model.elementIsPd);
+  findCoincidentNodes(model);
   addSupportLayer(model);
 
   const HostQuadMesh& mesh = model.shell.mesh;

@@ -1,6 +1,8 @@
 // The device bond list against O(N^2) brute force on the host: the same bond set (exact
 // lists), symmetric rows, consistent full/half maps, exact counts on a lattice, the
 // partial-volume factor, pre-cracks, and rejected inputs.
+#include <perishell/mesh/quad_mesh.hpp>
+#include <perishell/pd/make_body.hpp>
 #include <perishell/pd/neighbor_search.hpp>
 
 #include <algorithm>
@@ -260,6 +262,67 @@ TEST(TEST_CATEGORY, bond_list_precracks_remove_crossing_bonds_only) {
   EXPECT_TRUE(hasBond(bonds, node(20, 4), node(20, 6)));    // along the crack
   EXPECT_TRUE(hasBond(bonds, node(19, 13), node(21, 13)));  // above the column crack's end
   EXPECT_FALSE(hasBond(bonds, node(19, 12), node(21, 12)));
+}
+
+// A 1 m x 0.6 m plate, 10 x 6 quads, slit along x = 0.5 from y = 0 to the tip at y = 0.3:
+// the quads right of the slit use copies of its nodes at y = 0, 0.1, 0.2 (numbered 77, 78,
+// 79 after the plate's 77 nodes 0..76), so its two faces coincide and are not connected.
+perishell::mesh::HostQuadMesh slitPlate() {
+  const auto plate = perishell::mesh::makeRectangularPlate(1.0, 0.6, 10, 6);
+  const int nodesX = 11, numNodes = plate.numNodes();
+  perishell::mesh::HostQuadMesh slit{HostPositions("slit plate", numNodes + 3), plate.quads};
+  for (int n = 0; n < numNodes; ++n)
+    for (int d = 0; d < 3; ++d) slit.coordinates(n, d) = plate.coordinates(n, d);
+  for (int row = 0; row < 3; ++row)
+    for (int d = 0; d < 3; ++d) slit.coordinates(numNodes + row, d) = plate.coordinates(row * nodesX + 5, d);
+  for (int e = 0; e < plate.numElements(); ++e) {
+    double centroidX = 0.0;
+    for (int a = 0; a < 4; ++a) centroidX += 0.25 * plate.coordinates(plate.quads(e, a), 0);
+    if (centroidX < 0.5) continue;
+    for (int a = 0; a < 4; ++a) {
+      const int n = plate.quads(e, a);
+      if (n % nodesX == 5 && n / nodesX < 3) slit.quads(e, a) = numNodes + n / nodesX;
+    }
+  }
+  return slit;
+}
+
+TEST(TEST_CATEGORY, bond_list_never_crosses_a_slit_of_the_mesh) {
+  const auto mesh = slitPlate();
+  const int numNodes = mesh.numNodes(), firstCopy = numNodes - 3;
+  const double horizon = 0.3, spacing = 0.1;
+  Kokkos::View<perishell::LocalIndex*, Kokkos::HostSpace> all("all nodes", numNodes);
+  for (int n = 0; n < numNodes; ++n) all(n) = n;
+  const auto built = perishell::pd::buildBondsAmong(TEST_EXECSPACE{}, mesh, all, horizon, spacing, {});
+  const auto bonds = perishell::pd::mirrorTo<Kokkos::HostSpace>(built.bonds);
+  // Reference: the side of each node (-1 left, +1 right, 0 on the line beyond the slit) and
+  // the straight bond crossing x = 0.5 at y <= 0.3 from one side to the other is cut.
+  const auto side = [&](int n) {
+    const double x = mesh.coordinates(n, 0), y = mesh.coordinates(n, 1);
+    if (std::abs(x - 0.5) > 1e-12) return x < 0.5 ? -1 : 1;
+    if (n >= firstCopy) return 1;
+    return y < 0.3 - 1e-12 ? -1 : 0;
+  };
+  const auto crossesSlit = [&](const HostPositions& x, int i, int j) {
+    if (distance(x, i, j) < 1e-9) return true;  // the slit's coincident nodes never bond
+    if (side(i) * side(j) >= 0) return false;
+    const double xi = x(i, 0), xj = x(j, 0);
+    const double y = std::abs(xi - xj) < 1e-12 ? std::min(x(i, 1), x(j, 1))
+                                               : x(i, 1) + (0.5 - xi) / (xj - xi) * (x(j, 1) - x(i, 1));
+    return y <= 0.3 + 1e-12;
+  };
+  const auto reference = bruteForceBonds(mesh.coordinates, horizon, crossesSlit);
+  for (const auto& [i, j] : halfBondsOf(bonds))
+    EXPECT_TRUE(std::binary_search(reference.begin(), reference.end(), Bond{i, j}))
+        << "bond " << i << " (" << mesh.coordinates(i, 0) << ", " << mesh.coordinates(i, 1) << ") - " << j << " ("
+        << mesh.coordinates(j, 0) << ", " << mesh.coordinates(j, 1) << ") crosses the slit";
+  expectMatchesReference(bonds, mesh.coordinates, horizon, spacing, reference);
+  // The slit cuts something, and bonds still run around its tip.
+  EXPECT_LT(reference.size(), bruteForceBonds(mesh.coordinates, horizon).size() - 3);
+  EXPECT_TRUE(hasBond(bonds, 3 * 11 + 4, 4 * 11 + 6));  // (0.4, 0.3) - (0.6, 0.4): past the tip
+  EXPECT_FALSE(hasBond(bonds, 4, 6));                   // (0.4, 0) - (0.6, 0): across the slit
+  EXPECT_FALSE(hasBond(bonds, 11 + 5, firstCopy + 2));  // along the slit, face to face
+  EXPECT_TRUE(hasBond(bonds, 11 + 5, 2 * 11 + 5));      // along one face
 }
 
 TEST(TEST_CATEGORY, bond_list_of_no_nodes_is_empty) {

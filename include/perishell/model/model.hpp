@@ -26,6 +26,10 @@ struct Model {
   Kokkos::View<LocalIndex*, Kokkos::HostSpace> pdNodes;
   // Distinct (node, DOF) pairs that supports prescribe.
   long long numConstrainedDofs = 0;
+  // Distinct nodes of the deck's mesh at one point (a slit's faces, an unmerged seam): no bond
+  // joins them or crosses between their faces. The first pair, and how many.
+  std::pair<LocalIndex, LocalIndex> firstCoincidentPair{-1, -1};
+  long long numCoincidentPairs = 0;
 
   double gridSpacing() const { return deck.mesh.spacing; }
   double horizon() const { return deck.peridynamics.horizonFactor * deck.mesh.spacing; }

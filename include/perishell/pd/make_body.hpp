@@ -3,6 +3,7 @@
 // mapping over the whole mesh, the chosen PD nodes' geometry gathered from them, bonds by
 // the device neighbour search (pre-cracks cut), micromoduli and fracture threshold from the
 // material (model.md §1-3).
+#include <perishell/mesh/free_edges.hpp>
 #include <perishell/mesh/node_geometry.hpp>
 #include <perishell/pd/neighbor_search.hpp>
 #include <perishell/core/rotation.hpp>
@@ -229,7 +230,34 @@ template <class MemorySpaceT>
 struct PdNodeBonds {
   CoordinateView<MemorySpaceT> positions;
   BondList<MemorySpaceT> bonds;
+  BoundaryFaces<MemorySpaceT> boundary;  // what the bonds may not cross
 };
+
+// The mesh's boundary faces within the horizon of the chosen nodes (none on most meshes:
+// only slits and notches have material beyond a free edge), on the device.
+template <class MemorySpaceT>
+BoundaryFaces<MemorySpaceT> boundaryFacesFor(const mesh::HostQuadMesh& hostMesh,
+                                             const Kokkos::View<const LocalIndex*, Kokkos::HostSpace>& pdNodes,
+                                             const CoordinateView<Kokkos::HostSpace>& pdPositions, double horizon) {
+  BoundaryFaces<MemorySpaceT> boundary;
+  const auto faces = mesh::boundaryFaces(hostMesh, horizon);
+  if (faces.empty()) return boundary;
+  const LocalIndex numPdNodes = static_cast<LocalIndex>(pdNodes.extent(0));
+  Kokkos::View<mesh::BoundaryFace*, Kokkos::HostSpace> hostFaces("boundary faces", faces.size());
+  for (std::size_t f = 0; f < faces.size(); ++f) hostFaces(f) = faces[f];
+  const auto allDirections = mesh::nodeMaterialDirections(hostMesh);
+  CoordinateView<Kokkos::HostSpace> directions("pd node material directions", numPdNodes);
+  for (LocalIndex k = 0; k < numPdNodes; ++k)
+    for (int d = 0; d < 3; ++d) directions(k, d) = allDirections(pdNodes(k), d);
+  // A filter only: a margin keeps bonds of length exactly delta in.
+  const auto near = mesh::pointsNearFaces(pdPositions, faces, 1.01 * horizon);
+  Kokkos::View<std::uint8_t*, Kokkos::HostSpace> hostNear("pd nodes near a boundary face", numPdNodes);
+  for (LocalIndex k = 0; k < numPdNodes; ++k) hostNear(k) = near[k];
+  boundary.faces = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostFaces);
+  boundary.materialDirections = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, directions);
+  boundary.nearFace = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostNear);
+  return boundary;
+}
 
 template <class ExecutionSpaceT>
 PdNodeBonds<typename ExecutionSpaceT::memory_space> buildBondsAmong(
@@ -250,8 +278,10 @@ PdNodeBonds<typename ExecutionSpaceT::memory_space> buildBondsAmong(
   PdNodeBonds<MemorySpaceT> result;
   result.positions = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostPositions);
   const auto cracks = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostCracks);
+  result.boundary = boundaryFacesFor<MemorySpaceT>(hostMesh, pdNodes, hostPositions, horizon);
   result.bonds = buildBondList(space, result.positions, horizon, gridSpacing, cracks,
-                               firstHeld < numPdNodes ? firstHeld : std::numeric_limits<LocalIndex>::max());
+                               firstHeld < numPdNodes ? firstHeld : std::numeric_limits<LocalIndex>::max(),
+                               result.boundary);
   return result;
 }
 
@@ -297,7 +327,8 @@ PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
   const bool anyHeld = pdNodes.extent(0) > 0 && pdNodes(pdNodes.extent(0) - 1) >= firstHeldNode;
   if (!preCracks.empty() || anyHeld)
     uncutBonds = buildBondList(space, body.referencePositions, horizon, gridSpacing,
-                               Kokkos::View<const mesh::CrackSegment*, MemorySpaceT>());
+                               Kokkos::View<const mesh::CrackSegment*, MemorySpaceT>(),
+                               std::numeric_limits<LocalIndex>::max(), nodeBonds.boundary);
   computeStiffnessScales(space, body, horizon, material.thickness,
                          Kokkos::View<const std::uint8_t*, MemorySpaceT>(
                              Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, nodesAtCcmInterface)),

@@ -1,7 +1,9 @@
 #pragma once
 // Builds the PD bond list on the device in O(N) for bounded node density (model.md §1):
-// bonds join nodes i != j with |X_j - X_i| <= delta, except those crossing a pre-crack and
-// those between two nodes of a support layer (both held: such a bond never acts).
+// bonds join nodes i != j with 0 < |X_j - X_i| <= delta, except those crossing a pre-crack,
+// those crossing a boundary face of the mesh (material the mesh does not connect: a slit's
+// faces, a notch) and those between two nodes of a support layer (both held: such a bond
+// never acts).
 // A uniform cell grid (cells >= delta) bins the nodes (count, scan, fill); each node then
 // visits the 27 cells around it twice: once to count its neighbours, once, after a scan to
 // row offsets, to write and sort them. The half list and fullToHalf follow from the sorted
@@ -10,6 +12,8 @@
 #include <perishell/core/types.hpp>
 #include <perishell/mesh/crack_segment.hpp>
 #include <perishell/pd/bond_list.hpp>
+#include <perishell/mesh/boundary_face.hpp>
+#include <perishell/pd/detail/boundary_crossing.hpp>
 #include <perishell/pd/detail/cell_grid.hpp>
 #include <perishell/pd/detail/crack_crossing.hpp>
 
@@ -20,6 +24,16 @@
 #include <string>
 
 namespace perishell::pd {
+
+// The mesh's boundary faces with material beyond them (mesh/boundary_face.hpp), and per node
+// of the bond search its material direction and whether a face lies within the horizon.
+// Empty: none.
+template <class MemorySpaceT>
+struct BoundaryFaces {
+  Kokkos::View<const mesh::BoundaryFace*, MemorySpaceT> faces;
+  CoordinateView<MemorySpaceT> materialDirections;
+  Kokkos::View<const std::uint8_t*, MemorySpaceT> nearFace;
+};
 
 namespace detail {
 
@@ -89,6 +103,22 @@ struct CellNeighbourSearch {
   Kokkos::View<const mesh::CrackSegment*, MemorySpaceT> cracks;
   double radiusSquared;
   LocalIndex firstHeldNode;  // nodes from here on are a support layer's
+  BoundaryFaces<MemorySpaceT> boundary;
+  double coincidentSquared;  // nodes closer than this are one point: never bonded
+
+  KOKKOS_INLINE_FUNCTION bool crossesAnyFace(const LocalIndex i, const LocalIndex j) const {
+    if (boundary.faces.extent(0) == 0 || !boundary.nearFace(i) || !boundary.nearFace(j)) return false;
+    const LocalIndex first = i < j ? i : j, second = i < j ? j : i;
+    const double a[3] = {positions(first, 0), positions(first, 1), positions(first, 2)};
+    const double b[3] = {positions(second, 0), positions(second, 1), positions(second, 2)};
+    const auto& g = boundary.materialDirections;
+    const double gA[3] = {g(first, 0), g(first, 1), g(first, 2)};
+    const double gB[3] = {g(second, 0), g(second, 1), g(second, 2)};
+    const double reach = Kokkos::Experimental::sqrt(radiusSquared);
+    for (std::size_t f = 0; f < boundary.faces.extent(0); ++f)
+      if (bondCrossesFace(a, b, gA, gB, boundary.faces(f), reach)) return true;
+    return false;
+  }
 
   KOKKOS_INLINE_FUNCTION bool crossesAnyCrack(const LocalIndex i, const LocalIndex j) const {
     const LocalIndex first = i < j ? i : j, second = i < j ? j : i;
@@ -117,9 +147,10 @@ struct CellNeighbourSearch {
             const LocalIndex j = cellNodes(k);
             if (j == i) continue;
             const double dx = positions(j, 0) - x[0], dy = positions(j, 1) - x[1], dz = positions(j, 2) - x[2];
-            if (dx * dx + dy * dy + dz * dz > radiusSquared) continue;
+            const double distanceSquared = dx * dx + dy * dy + dz * dz;
+            if (distanceSquared > radiusSquared || distanceSquared <= coincidentSquared) continue;
             if (i >= firstHeldNode && j >= firstHeldNode) continue;
-            if (crossesAnyCrack(i, j)) continue;
+            if (crossesAnyCrack(i, j) || crossesAnyFace(i, j)) continue;
             visit(j);
           }
         }
@@ -130,7 +161,8 @@ template <class ExecutionSpaceT, class MemorySpaceT>
 CellNeighbourSearch<MemorySpaceT> binNodes(const ExecutionSpaceT& space, const CoordinateView<MemorySpaceT>& positions,
                                            const BoundingBox& box, const double radius,
                                            const Kokkos::View<const mesh::CrackSegment*, MemorySpaceT>& cracks,
-                                           const LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max()) {
+                                           const LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max(),
+                                           const BoundaryFaces<MemorySpaceT>& boundary = {}) {
   using Policy = Kokkos::RangePolicy<ExecutionSpaceT>;
   const LocalIndex numNodes = static_cast<LocalIndex>(positions.extent(0));
   const CellGrid grid = makeCellGrid(box, radius, numNodes);
@@ -152,15 +184,19 @@ CellNeighbourSearch<MemorySpaceT> binNodes(const ExecutionSpaceT& space, const C
         const int cell = grid.cellOf(positions(node, 0), positions(node, 1), positions(node, 2));
         cellNodes(cellOffsets(cell) + Kokkos::atomic_fetch_add(&cellFill(cell), 1)) = node;
       });
-  return {positions, grid, cellOffsets, cellNodes, cracks, radius * radius, firstHeldNode};
+  // A millionth of the horizon apart is one point to any mesh a horizon covers.
+  const double coincident = 1e-6 * radius;
+  return {positions, grid,          cellOffsets, cellNodes, cracks, radius * radius, firstHeldNode,
+          boundary,  coincident * coincident};
 }
 
 }  // namespace detail
 
 // The bonds of the nodes `positions` for horizon delta = `horizon` [m] on a grid of spacing
 // dx = `gridSpacing` [m] (used for the partial-volume factor), without bonds that cross
-// `cracks` (rule: mesh/crack_segment.hpp) and those between two nodes from firstHeldNode on
-// (a support layer, mesh/support_layer.hpp). Throws std::invalid_argument for a horizon or
+// `cracks` (rule: mesh/crack_segment.hpp), those that cross `boundary` (rule:
+// pd/detail/boundary_crossing.hpp), those between coincident nodes and those between two
+// nodes from firstHeldNode on (a support layer, mesh/support_layer.hpp). Throws std::invalid_argument for a horizon or
 // spacing that is not positive and finite, a horizon below the spacing, or non-finite
 // positions. No nodes give an empty list.
 template <class ExecutionSpaceT, class MemorySpaceT>
@@ -168,7 +204,8 @@ BondList<MemorySpaceT> buildBondList(
     const ExecutionSpaceT& space, const CoordinateView<MemorySpaceT>& positions, const double horizon,
     const double gridSpacing,
     const Kokkos::View<const mesh::CrackSegment*, typename detail::NonDeduced<MemorySpaceT>::type>& cracks,
-    const LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max()) {
+    const LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max(),
+    const BoundaryFaces<typename detail::NonDeduced<MemorySpaceT>::type>& boundary = {}) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   static_assert(Kokkos::SpaceAccessibility<ExecutionSpaceT, MemorySpaceT>::accessible,
                 "buildBondList: the positions must be accessible from the execution space");
@@ -197,7 +234,7 @@ BondList<MemorySpaceT> buildBondList(
     if (!std::isfinite(box.upper[d] - box.lower[d]))
       throw std::invalid_argument("buildBondList: positions: the nodes' bounding box is too large to represent");
   const double radius = horizon * (1.0 + detail::relativeHorizonTolerance);
-  const auto search = detail::binNodes(space, positions, box, radius, cracks, firstHeldNode);
+  const auto search = detail::binNodes(space, positions, box, radius, cracks, firstHeldNode, boundary);
 
   // Full list: count, scan to row offsets, fill and sort each row.
   Kokkos::View<LocalIndex*, MemorySpaceT> rowCounts(
