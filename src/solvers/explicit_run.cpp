@@ -256,6 +256,8 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
                      deck.zones.adaptive->strainFraction);
   const auto bodies = adaptive ? adaptive->bodies() : coupling::makeCoupledBodies(space, model);
   const auto& body = bodies.pdBody;
+  // The support layer's elements are PD from the start; the counts are the deck's mesh's.
+  const LocalIndex layerElements = model.shell.mesh.numElements() - model.numMeshElements();
   ExplicitOptions options;
   options.density = deck.material.density;
   options.thickness = deck.material.thickness;
@@ -309,7 +311,7 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
         output.setZoneNodes(adaptive->pdElementNodes());
         ++switches;
         log << "adaptive PD zone: step " << step << " (t = " << solver.time() << " s): " << switched
-            << " elements turned PD, now " << adaptive->numPdElements() << " PD elements, "
+            << " elements turned PD, now " << adaptive->numPdElements() - layerElements << " PD elements, "
             << solver.body().bonds.numBonds() << " bonds, " << solver.numElements() << " shell elements\n";
       }
       adaptiveSeconds += fencedSecondsSince(space, checkStart);
@@ -369,7 +371,7 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
       .add("timings", summary.timingsPath);
   if (adaptive)
     table.add("adaptive PD zone", std::to_string(model.numPdElements) + " -> " +
-                                      std::to_string(adaptive->numPdElements()) + " PD elements in " +
+                                      std::to_string(adaptive->numPdElements() - layerElements) + " PD elements in " +
                                       std::to_string(switches) + " switches");
   table.print(log);
   return summary;
