@@ -517,7 +517,10 @@ class StaticNewtonSolver {
         loadSquared);
     if (pd_) {
       const pd::BondForceOutputs<Memory> outputs{r, VectorView<Memory>(), fractureScratch_, intactScratch_};
-      pd::computeBondForces(space_, deck::ForceKernel::BondScatter, *pd_, state_, intact_, outputs);
+      // Node-gather, as the explicit step: in the app (libperishell, where the explicit driver
+      // instantiates the same kernels) the bond-scatter launch from here jumped to address 0
+      // on the H200 (cuda-gdb), while test binaries ran it; node-gather, no atomics, runs.
+      pd::computeBondForces(space_, deck::ForceKernel::NodeGather, *pd_, state_, intact_, outputs);
     }
     if (shell_) shell::subtractShellForces(space_, *shell_, state_, r);
     return {outOfBalanceNorm(false), std::max(std::sqrt(loadSquared), outOfBalanceNorm(true))};
