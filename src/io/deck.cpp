@@ -689,7 +689,8 @@ std::vector<deck::Curve> readCurves(const Section& section) {
 
 deck::Solver readSolver(const Section& section) {
   using deck::SolverType;
-  const std::vector<std::string> explicitKeys{"type", "end-time", "steps", "dt", "safety-factor", "damping"};
+  const std::vector<std::string> explicitKeys{"type",    "end-time",      "steps",    "dt", "safety-factor",
+                                              "damping", "shell-element", "hourglass"};
   const std::vector<std::string> implicitKeys{"type", "increments", "max-iterations", "tolerance",
                                               "preconditioner", "max-cuts", "tangent", "amg-reuse",
                                               "line-search", "control", "max-increments"};
@@ -721,6 +722,13 @@ deck::Solver readSolver(const Section& section) {
     settings.damping = section.number("damping", settings.damping);
     if (settings.damping < 0.0)
       section.fail("damping", "must be >= 0 [1/s], got " + formatNumber(settings.damping));
+    using ShellElement = deck::ExplicitSettings::ShellElement;
+    settings.shellElement = section.choice<ShellElement>(
+        "shell-element", {{"one-point", ShellElement::OnePoint}, {"mitc4", ShellElement::Mitc4}}, settings.shellElement);
+    settings.hourglassCoefficient = section.number("hourglass", settings.hourglassCoefficient);
+    if (!(settings.hourglassCoefficient > 0.0 && settings.hourglassCoefficient <= 1.0))
+      section.fail("hourglass", "must lie in (0, 1] (the hourglass stiffness coefficient), got " +
+                                    formatNumber(settings.hourglassCoefficient));
   } else {
     section.allowOnly(implicitKeys, "for solver type implicit");
     auto& settings = solver.implicitSettings;

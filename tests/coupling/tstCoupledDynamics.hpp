@@ -1,9 +1,11 @@
 // Explicit dynamics of mixed PD-CCM plates (model.md §4, §6): shell elements and morphed bonds
-// on one state per mesh node. Free vibration conserves energy (2,000 steps, to keep the
-// sanitizer build's serial run short) with the zone inside the
-// plate and without any PD; the critical-step estimate covers the elements (0.9 dt_crit
-// runs, 1.5 dt_crit is caught); a plane wave crosses a PD band at the plate wave speed; the
-// same mixed run agrees on the host and on TEST_EXECSPACE.
+// on one state per mesh node, with the one-point element (the explicit default) and with
+// MITC4. Free vibration conserves energy (2,000 steps, to keep the sanitizer build's serial
+// run short; 10,000 for a CCM plate) with the zone inside the plate and without any PD, and
+// the one-point elements' hourglass energy stays a small part of their strain energy; the
+// critical-step estimate covers the elements (0.9 dt_crit runs, 1.5 dt_crit is caught); a
+// plane wave runs at the plate wave speed in CCM and across a PD band; the same mixed run
+// agrees on the host and on TEST_EXECSPACE.
 #include <perishell/coupling/make_coupled_model.hpp>
 #include <perishell/mesh/generators.hpp>
 #include <perishell/solvers/explicit/central_difference.hpp>
@@ -17,6 +19,9 @@
 namespace coupled_dynamics_test {
 
 using perishell::LocalIndex;
+using Element = perishell::shell::ShellElementKind;
+constexpr Element elementKinds[2] = {Element::OnePoint, Element::Mitc4};
+inline const char* elementName(Element kind) { return kind == Element::OnePoint ? "one-point" : "MITC4"; }
 constexpr double pi = 3.14159265358979323846;
 constexpr double spacing = 1e-3, youngModulus = 70e9, thickness = 1e-3, density = 2440.0;
 
@@ -30,7 +35,7 @@ struct MixedPlate {
 
 // cellsX x cellsY elements of 1 mm; PD elements: none, a disc of radius 4 mm at the centre,
 // or a band 6 mm wide across x at the middle. delta = 3 dx, transition 2 delta, cubic.
-MixedPlate makeMixedPlate(int cellsX, int cellsY, double poissonRatio, Zone zone) {
+MixedPlate makeMixedPlate(int cellsX, int cellsY, double poissonRatio, Zone zone, Element kind) {
   MixedPlate plate;
   plate.shell = perishell::mesh::makePlate(cellsX * spacing, cellsY * spacing, spacing);
   const auto& mesh = plate.shell.mesh;
@@ -51,6 +56,7 @@ MixedPlate makeMixedPlate(int cellsX, int cellsY, double poissonRatio, Zone zone
   inputs.section = {youngModulus, poissonRatio, thickness};
   inputs.horizon = 3.0 * spacing;
   inputs.gridSpacing = spacing;
+  inputs.shellElement = kind;
   return plate;
 }
 
@@ -85,48 +91,62 @@ void startVibration(Solver<ExecutionSpaceT>& solver, const MixedPlate& plate) {
   solver.setInitialVelocities(Kokkos::create_mirror_view_and_copy(typename ExecutionSpaceT::memory_space{}, v));
 }
 
-// Worst |stored / initial - 1| over the steps (energy checked every 100 steps).
-double worstEnergyDrift(Solver<TEST_EXECSPACE>& solver, long long steps, double& largestStrain) {
+struct VibrationEnergies {
+  double worstDrift = 0.0;       // |stored / initial - 1|
+  double largestStrain = 0.0;    // strain / initial kinetic
+  double largestHourglass = 0.0;  // hourglass / strain energy
+};
+
+// Energies over the steps (checked every 100 steps).
+VibrationEnergies vibrationEnergies(Solver<TEST_EXECSPACE>& solver, long long steps) {
   solver.step();
   const auto initial = solver.lastEnergyReport();
   EXPECT_GT(initial.kinetic, 0.0);
-  double worst = 0.0;
-  largestStrain = 0.0;
+  VibrationEnergies result;
   while (solver.stepIndex() <= steps) {
     solver.step();
     const auto& report = solver.lastEnergyReport();
-    worst = std::max(worst, std::abs(report.stored() / initial.stored() - 1.0));
-    largestStrain = std::max(largestStrain, report.strain / initial.kinetic);
+    result.worstDrift = std::max(result.worstDrift, std::abs(report.stored() / initial.stored() - 1.0));
+    result.largestStrain = std::max(result.largestStrain, report.strain / initial.kinetic);
+    if (report.strain > 0.05 * initial.kinetic)
+      result.largestHourglass = std::max(result.largestHourglass, report.hourglass / report.strain);
   }
-  return worst;
+  return result;
 }
 
 }  // namespace coupled_dynamics_test
 
 TEST(TEST_CATEGORY, coupled_free_vibration_conserves_energy) {
   using namespace coupled_dynamics_test;
-  for (const Zone zone : {Zone::Disc, Zone::None}) {
-    const auto plate = makeMixedPlate(24, 24, 0.2, zone);
-    auto solver = makeSolver<TEST_EXECSPACE>(plate, perishell::solvers::makeFreeActions<TEST_MEMSPACE>(
-                                                        plate.shell.mesh.numNodes()));
-    EXPECT_GT(solver.numElements(), 0);
-    EXPECT_EQ(solver.body().bonds.numBonds() > 0, zone == Zone::Disc);
-    startVibration(solver, plate);
-    double largestStrain = 0.0;
-    const double drift = worstEnergyDrift(solver, 2000, largestStrain);
-    std::printf("%s: dt = %.4e s (critical %.4e s), worst energy drift over 2,000 steps %.3e, peak strain / initial "
-                "kinetic %.3f\n",
-                zone == Zone::Disc ? "PD disc in CCM plate" : "CCM plate", solver.timeStep(),
-                solver.criticalTimeStep(), drift, largestStrain);
-    // Energy really moved into the elements and bonds, so the check is not vacuous.
-    EXPECT_GT(largestStrain, 0.3);
-    EXPECT_LT(drift, 1e-3);
-  }
+  for (const Element kind : elementKinds)
+    for (const Zone zone : {Zone::Disc, Zone::None}) {
+      const auto plate = makeMixedPlate(24, 24, 0.2, zone, kind);
+      auto solver = makeSolver<TEST_EXECSPACE>(plate, perishell::solvers::makeFreeActions<TEST_MEMSPACE>(
+                                                          plate.shell.mesh.numNodes()));
+      EXPECT_GT(solver.numElements(), 0);
+      EXPECT_EQ(solver.body().bonds.numBonds() > 0, zone == Zone::Disc);
+      startVibration(solver, plate);
+      const long long steps = zone == Zone::None && kind == Element::OnePoint ? 10000 : 2000;
+      const VibrationEnergies energies = vibrationEnergies(solver, steps);
+      std::printf("%s, %s: dt = %.4e s (critical %.4e s), worst energy drift over %lld steps %.3e, peak strain / "
+                  "initial kinetic %.3f, peak hourglass / strain %.2e\n",
+                  zone == Zone::Disc ? "PD disc in CCM plate" : "CCM plate", elementName(kind), solver.timeStep(),
+                  solver.criticalTimeStep(), steps, energies.worstDrift, energies.largestStrain,
+                  energies.largestHourglass);
+      // Energy really moved into the elements and bonds, so the check is not vacuous.
+      EXPECT_GT(energies.largestStrain, 0.3);
+      EXPECT_LT(energies.worstDrift, 1e-3);
+      if (kind == Element::OnePoint)
+        EXPECT_LT(energies.largestHourglass, 0.01);
+      else
+        EXPECT_EQ(energies.largestHourglass, 0.0);
+    }
 }
 
 TEST(TEST_CATEGORY, coupled_time_step_below_the_limit_runs_and_above_it_is_caught) {
   using namespace coupled_dynamics_test;
-  const auto plate = makeMixedPlate(24, 24, 0.25, Zone::Disc);
+  for (const Element kind : elementKinds) {
+  const auto plate = makeMixedPlate(24, 24, 0.25, Zone::Disc, kind);
   const auto actions = perishell::solvers::makeFreeActions<TEST_MEMSPACE>(plate.shell.mesh.numNodes());
   const double critical = makeSolver<TEST_EXECSPACE>(plate, actions).criticalTimeStep();
   // The elements set the limit as well as the bonds. For lumped-mass membrane elements it is
@@ -134,7 +154,7 @@ TEST(TEST_CATEGORY, coupled_time_step_below_the_limit_runs_and_above_it_is_caugh
   // (exactly that for a 1D bar); a bending or drilling mode left unscaled by the rotary
   // inertia would make it far smaller.
   const double transit = spacing / std::sqrt(youngModulus / (density * (1.0 - 0.25 * 0.25)));
-  std::printf("critical step %.4e s, element transit time %.4e s\n", critical, transit);
+  std::printf("%s: critical step %.4e s, element transit time %.4e s\n", elementName(kind), critical, transit);
   EXPECT_GT(critical, 0.5 * transit);
   EXPECT_LT(critical, 1.1 * transit);
   {
@@ -153,6 +173,7 @@ TEST(TEST_CATEGORY, coupled_time_step_below_the_limit_runs_and_above_it_is_caugh
     EXPECT_NE(std::string(error.what()).find("ratio 1.5"), std::string::npos);
     EXPECT_LE(unstable.stepIndex(), 300);
   }
+  }
 }
 
 TEST(TEST_CATEGORY, coupled_plane_wave_crosses_a_pd_band_at_the_plate_wave_speed) {
@@ -161,7 +182,8 @@ TEST(TEST_CATEGORY, coupled_plane_wave_crosses_a_pd_band_at_the_plate_wave_speed
   // 91 and 109 mm. Uniaxial strain (u_y = 0, no bending DOF): the front runs at
   // sqrt(E / (rho (1 - nu^2))) in CCM and PD alike; timed over a CCM stretch and across the band.
   const double nu = 0.33;
-  const auto plate = makeMixedPlate(200, 10, nu, Zone::Band);
+  for (const Element kind : elementKinds) {
+  const auto plate = makeMixedPlate(200, 10, nu, Zone::Band, kind);
   const auto& mesh = plate.shell.mesh;
   const LocalIndex numNodes = mesh.numNodes();
   const double pushSpeed = 0.1, rampTime = 1.0;
@@ -193,10 +215,11 @@ TEST(TEST_CATEGORY, coupled_plane_wave_crosses_a_pd_band_at_the_plate_wave_speed
   for (int s = 0; s < 3; ++s) ASSERT_GT(arrival[s], 0.0) << "station " << s;
   const double ccmSpeed = (stations[1] - stations[0]) / (arrival[1] - arrival[0]);
   const double acrossBand = (stations[2] - stations[1]) / (arrival[2] - arrival[1]);
-  std::printf("plane wave: CCM %.1f m/s, across the PD band %.1f m/s, sqrt(E/(rho(1-nu^2))) = %.1f m/s\n", ccmSpeed,
-              acrossBand, expectedSpeed);
+  std::printf("plane wave, %s: CCM %.1f m/s, across the PD band %.1f m/s, sqrt(E/(rho(1-nu^2))) = %.1f m/s\n",
+              elementName(kind), ccmSpeed, acrossBand, expectedSpeed);
   EXPECT_NEAR(ccmSpeed / expectedSpeed, 1.0, 0.02);
   EXPECT_NEAR(acrossBand / expectedSpeed, 1.0, 0.02);
+  }
 }
 
 namespace coupled_dynamics_test {
@@ -215,7 +238,8 @@ perishell::CoordinateView<Kokkos::HostSpace> vibrateMixed(const MixedPlate& plat
 
 TEST(TEST_CATEGORY, coupled_host_and_device_runs_agree) {
   using namespace coupled_dynamics_test;
-  const auto plate = makeMixedPlate(24, 24, 0.2, Zone::Disc);
+  for (const Element kind : elementKinds) {
+  const auto plate = makeMixedPlate(24, 24, 0.2, Zone::Disc, kind);
   const double dt = 0.8 * makeSolver<Kokkos::DefaultHostExecutionSpace>(
                               plate, perishell::solvers::makeFreeActions<Kokkos::HostSpace>(plate.shell.mesh.numNodes()))
                               .criticalTimeStep();
@@ -227,9 +251,10 @@ TEST(TEST_CATEGORY, coupled_host_and_device_runs_agree) {
       largest = std::max(largest, std::abs(host(node, d)));
       difference = std::max(difference, std::abs(host(node, d) - device(node, d)));
     }
-  std::printf("%s vs %s, 500 steps: largest displacement %.4e m, largest difference %.3e m (relative %.2e)\n",
-              Kokkos::DefaultHostExecutionSpace::name(), TEST_EXECSPACE::name(), largest, difference,
-              difference / largest);
+  std::printf("%s, %s vs %s, 500 steps: largest displacement %.4e m, largest difference %.3e m (relative %.2e)\n",
+              elementName(kind), Kokkos::DefaultHostExecutionSpace::name(), TEST_EXECSPACE::name(), largest,
+              difference, difference / largest);
   ASSERT_GT(largest, 0.0);
   EXPECT_LT(difference, 1e-10 * largest);
+  }
 }

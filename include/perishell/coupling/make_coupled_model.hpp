@@ -65,6 +65,8 @@ struct CouplingInputs {
   std::vector<mesh::CrackSegment> preCracks;
   deck::Transition transition;  // width 0: 2 delta
   LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max();  // the support layer's first node
+  // The CCM elements' formulation: MITC4 for both solvers, the one-point element for explicit runs.
+  shell::ShellElementKind shellElement = shell::ShellElementKind::Mitc4;
 };
 
 // elementIsPd: per mesh element, 1 where PD (model.md §1). Throws std::invalid_argument on
@@ -144,11 +146,12 @@ CoupledBodies<typename ExecutionSpaceT::memory_space> makeCoupledBodies(
     for (int a = 0; a < 4; ++a) hostCcmQuads(k, a) = hostMesh.quads(bodies.ccmElements[k], a);
   const auto ccmQuads = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostCcmQuads);
   bodies.shellBody = shell::makeShellBody(space, hostMesh, bodies.ccmElements, inputs.section,
-                                          hybridSectionScales(space, ccmQuads, bodies.alphaBar));
+                                          hybridSectionScales(space, ccmQuads, bodies.alphaBar), inputs.shellElement);
   return bodies;
 }
 
-// A model's coupling inputs: its deck's material, horizon, pre-cracks and zones.transition.
+// A model's coupling inputs: its deck's material, horizon, pre-cracks and zones.transition;
+// for an explicit deck, solver.shell-element and solver.hourglass.
 inline CouplingInputs couplingInputs(const model::Model& model) {
   const auto& material = model.deck.material;
   CouplingInputs inputs;
@@ -161,6 +164,13 @@ inline CouplingInputs couplingInputs(const model::Model& model) {
   inputs.preCracks = model.preCrackSegments();
   inputs.transition = model.deck.zones.transition;
   inputs.firstHeldNode = model.supportLayer.firstNode;
+  if (model.deck.solver.type == deck::SolverType::Explicit) {
+    const auto& settings = model.deck.solver.explicitSettings;
+    using ShellElement = deck::ExplicitSettings::ShellElement;
+    inputs.shellElement = settings.shellElement == ShellElement::OnePoint ? shell::ShellElementKind::OnePoint
+                                                                          : shell::ShellElementKind::Mitc4;
+    inputs.section.hourglassCoefficient = settings.hourglassCoefficient;
+  }
   return inputs;
 }
 

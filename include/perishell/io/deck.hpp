@@ -182,6 +182,9 @@ struct ExplicitSettings {
   std::optional<double> timeStep;  // dt [s]; absent: safetyFactor times the stable estimate
   double safetyFactor = 0.9;
   double damping = 0.0;  // mass-proportional damping coefficient [1/s]
+  // The CCM elements' formulation (docs/explicit.md, "The explicit shell element").
+  enum class ShellElement { OnePoint, Mitc4 } shellElement = ShellElement::OnePoint;
+  double hourglassCoefficient = 0.1;  // r of the one-point element's hourglass stiffness
 };
 
 struct ImplicitSettings {

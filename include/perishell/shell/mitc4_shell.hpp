@@ -46,6 +46,9 @@ struct ShellSection {
   // non-singular without stiffening the membrane: 1e-3 leaves the patch tests exact
   // (theta_z = omega there) and keeps the drilling stiffness far below the membrane's.
   double drillingFactor = 1e-3;
+  // Hourglass stiffness coefficient r of the explicit one-point element
+  // (shell/one_point_shell.hpp; LS-DYNA's default QM is 0.1). MITC4 has no hourglass modes.
+  double hourglassCoefficient = 0.1;
 };
 
 constexpr int shellNodeCount = 4;
@@ -72,16 +75,27 @@ inline void checkShellSection(const ShellSection& section) {
   if (!(section.drillingFactor > 0.0) || !std::isfinite(section.drillingFactor))
     throw std::invalid_argument("shell section: drilling factor must be positive, got " +
                                 std::to_string(section.drillingFactor));
+  if (!(section.hourglassCoefficient > 0.0) || !std::isfinite(section.hourglassCoefficient))
+    throw std::invalid_argument("shell section: hourglass coefficient must be positive, got " +
+                                std::to_string(section.hourglassCoefficient));
 }
 
 namespace detail {
+
+// What the corotational frame normalised: |n| of the diagonals' cross product n, |P a| of
+// the in-plane part of the xi-direction edge sum a, and a . e3 (the explicit element's
+// corotational projector needs them, shell/one_point_shell.hpp).
+template <class T>
+struct FrameLengths {
+  T normal, along, alongNormal;
+};
 
 // Corotational frame (model.md §5) as rows e1 e2 e3, and the centroid: e3 along the cross
 // product of the diagonals, e1 along the mean of the two xi-direction edges made orthogonal
 // to e3, e2 = e3 x e1. Built from cross products and lengths only, so it rotates with the
 // nodes: a rigid motion leaves the local coordinates unchanged.
 template <class T>
-KOKKOS_INLINE_FUNCTION void corotationalFrame(const T x[4][3], T frame[3][3], T centroid[3]) {
+KOKKOS_INLINE_FUNCTION void corotationalFrame(const T x[4][3], T frame[3][3], T centroid[3], FrameLengths<T>& lengths) {
   T diagonal13[3], diagonal24[3], along[3];
   for (int k = 0; k < 3; ++k) {
     centroid[k] = 0.25 * (x[0][k] + x[1][k] + x[2][k] + x[3][k]);
@@ -90,11 +104,17 @@ KOKKOS_INLINE_FUNCTION void corotationalFrame(const T x[4][3], T frame[3][3], T 
     along[k] = x[1][k] + x[2][k] - x[0][k] - x[3][k];
   }
   rotation::cross(diagonal13, diagonal24, frame[2]);
-  rotation::normalise(frame[2]);
-  const T normalPart = rotation::dot(along, frame[2]);
-  for (int k = 0; k < 3; ++k) frame[0][k] = along[k] - normalPart * frame[2][k];
-  rotation::normalise(frame[0]);
+  lengths.normal = rotation::normalise(frame[2]);
+  lengths.alongNormal = rotation::dot(along, frame[2]);
+  for (int k = 0; k < 3; ++k) frame[0][k] = along[k] - lengths.alongNormal * frame[2][k];
+  lengths.along = rotation::normalise(frame[0]);
   rotation::cross(frame[2], frame[0], frame[1]);
+}
+
+template <class T>
+KOKKOS_INLINE_FUNCTION void corotationalFrame(const T x[4][3], T frame[3][3], T centroid[3]) {
+  FrameLengths<T> lengths;
+  corotationalFrame(x, frame, centroid, lengths);
 }
 
 }  // namespace detail

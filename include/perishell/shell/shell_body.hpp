@@ -1,11 +1,13 @@
 #pragma once
-// The CCM part of a model on one memory space, and its two kernels (paper §3.2.1, element
+// The CCM part of a model on one memory space, and its kernels (paper §3.2.1, element
 // mapping): internal forces scattered with atomic_add, and the tangent added into the CRS
-// values through the pattern's precomputed slots. One thread per element; the element
-// itself is shell/mitc4_shell.hpp.
+// values through the pattern's precomputed slots. One thread per element; the elements
+// themselves are shell/mitc4_shell.hpp (both solvers) and shell/one_point_shell.hpp
+// (the explicit solver's default).
 #include <perishell/mesh/quad_mesh.hpp>
 #include <perishell/pd/pd_body.hpp>
 #include <perishell/shell/mitc4_shell.hpp>
+#include <perishell/shell/one_point_shell.hpp>
 
 #include <sstream>
 #include <stdexcept>
@@ -13,19 +15,46 @@
 
 namespace perishell::shell {
 
+// Which element the CCM part uses: the MITC4 element (shell/mitc4_shell.hpp; both solvers;
+// its 24 x 24 K_l cached per element) or the one-point element (shell/one_point_shell.hpp;
+// explicit only; nothing cached).
+enum class ShellElementKind { Mitc4, OnePoint };
+
+// How the one-point element's forces reach the nodes: Scatter, one thread per element adding
+// its 24 forces with atomic_add; Gather, one thread per element writing them to a buffer,
+// then one thread per node summing its elements' entries (no atomics). Measured in
+// perf/explicit_shell.cpp (docs/explicit.md): each backend takes its faster one.
+enum class ElementForceAssembly { Scatter, Gather };
+
 template <class MemorySpaceT>
 struct ShellBody {
+  ShellElementKind kind = ShellElementKind::Mitc4;
+  ShellSection section;
   CoordinateView<MemorySpaceT> referencePositions;  // every mesh node [m]
   QuadConnectivityView<MemorySpaceT> quads;          // the CCM elements
-  // K_l of each element in its reference frame (24 x 24, cached: the element is flat).
+  // MITC4 only: K_l of each element in its reference frame (24 x 24, cached: the element is flat).
   Kokkos::View<double* [24][24], Kokkos::LayoutRight, MemorySpaceT> localStiffness;
   // Per element and Gauss point, the factor on the membrane and bending blocks of D that
   // K_l was built with: 1 for a plain CCM element, 1 - alpha_bar in the PD-CCM transition
-  // (model.md §4, coupling/morphing.hpp).
+  // (model.md §4, coupling/morphing.hpp). The one-point element takes their mean.
   Kokkos::View<double* [4], Kokkos::LayoutRight, MemorySpaceT> membraneBendingScale;
+  // One-point only: the force assembly, and for Gather the node-to-element incidence (node
+  // n's entries nodeElementOffsets(n) .. (n + 1), each 4 e + a for corner a of element e) and
+  // the elements' forces and energies (24 forces, strain, hourglass) between the two kernels.
+  ElementForceAssembly assembly = ElementForceAssembly::Scatter;
+  Kokkos::View<RowOffset*, MemorySpaceT> nodeElementOffsets;
+  Kokkos::View<LocalIndex*, MemorySpaceT> nodeElementEntries;
+  Kokkos::View<double* [26], Kokkos::LayoutRight, MemorySpaceT> elementForces;
 
   LocalIndex numElements() const { return static_cast<LocalIndex>(quads.extent(0)); }
 };
+
+// The faster assembly of the one-point element's forces on each backend (docs/explicit.md,
+// "The explicit shell element").
+template <class ExecutionSpaceT>
+constexpr ElementForceAssembly defaultElementForceAssembly() {
+  return ElementForceAssembly::Scatter;
+}
 
 namespace detail {
 
@@ -49,13 +78,14 @@ KOKKOS_INLINE_FUNCTION void loadElement(const ShellBody<MemorySpaceT>& body, con
 
 // The CCM elements of a mesh (body element k is mesh element ccmElements[k]) with their
 // section, the membrane and bending blocks of D scaled per element and Gauss point by
-// membraneBendingScale (numElements x 4, on the device). Throws std::invalid_argument
-// naming the first degenerate element.
+// membraneBendingScale (numElements x 4, on the device), as elements of `kind`. Throws
+// std::invalid_argument naming the first element the kind cannot represent.
 template <class ExecutionSpaceT>
 ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
     const ExecutionSpaceT& space, const mesh::HostQuadMesh& mesh, const std::vector<LocalIndex>& ccmElements,
     const ShellSection& section,
-    const Kokkos::View<double* [4], Kokkos::LayoutRight, typename ExecutionSpaceT::memory_space>& membraneBendingScale) {
+    const Kokkos::View<double* [4], Kokkos::LayoutRight, typename ExecutionSpaceT::memory_space>& membraneBendingScale,
+    ShellElementKind kind = ShellElementKind::Mitc4) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   using MemorySpaceT = typename ExecutionSpaceT::memory_space;
   if (membraneBendingScale.extent(0) != ccmElements.size()) {
@@ -71,13 +101,33 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
       quads(k, a) = mesh.quads(ccmElements[k], a);
       for (int d = 0; d < 3; ++d) reference[a][d] = mesh.coordinates(quads(k, a), d);
     }
-    checkShellElement(reference, ccmElements[k]);
+    if (kind == ShellElementKind::OnePoint)
+      checkOnePointShellElement(reference, ccmElements[k]);
+    else
+      checkShellElement(reference, ccmElements[k]);
   }
   ShellBody<MemorySpaceT> body;
+  body.kind = kind;
+  body.section = section;
   body.referencePositions = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, mesh.coordinates);
   body.quads = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, quads);
-  body.localStiffness = decltype(body.localStiffness)("shell local stiffness", ccmElements.size());
   body.membraneBendingScale = membraneBendingScale;
+  if (kind == ShellElementKind::OnePoint) {
+    Kokkos::View<RowOffset*, Kokkos::HostSpace> offsets("shell node element offsets", mesh.numNodes() + 1);
+    for (std::size_t k = 0; k < quads.extent(0); ++k)
+      for (int a = 0; a < 4; ++a) ++offsets(quads(k, a) + 1);
+    for (LocalIndex node = 0; node < mesh.numNodes(); ++node) offsets(node + 1) += offsets(node);
+    Kokkos::View<LocalIndex*, Kokkos::HostSpace> entries("shell node element entries", 4 * quads.extent(0));
+    std::vector<RowOffset> next(offsets.data(), offsets.data() + mesh.numNodes());
+    for (std::size_t k = 0; k < quads.extent(0); ++k)
+      for (int a = 0; a < 4; ++a) entries(next[quads(k, a)]++) = static_cast<LocalIndex>(4 * k + a);
+    body.nodeElementOffsets = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, offsets);
+    body.nodeElementEntries = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, entries);
+    body.elementForces = decltype(body.elementForces)("shell element forces", quads.extent(0));
+    body.assembly = defaultElementForceAssembly<ExecutionSpaceT>();
+    return body;
+  }
+  body.localStiffness = decltype(body.localStiffness)("shell local stiffness", ccmElements.size());
   const auto b = body;
   Kokkos::parallel_for(
       "perishell::shell::localStiffness", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, b.numElements()),
@@ -109,13 +159,60 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(const ExecutionS
 
 // forces -= internal forces of every element (the caller's forces are the loads acting on
 // the nodes, so the result is the out-of-balance force). With a non-empty energy view, each
-// element's energy W = 1/2 d^T K_l d is also added to it, a quarter per node.
+// element's energy (MITC4: W = 1/2 d^T K_l d) is also added to it, a quarter per node, and
+// with a non-empty hourglassEnergy view the one-point element's hourglass part likewise.
 template <class ExecutionSpaceT, class MemorySpaceT>
 void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
                          const pd::PdKinematics<MemorySpaceT>& state, const pd::NodalVectorView<MemorySpaceT>& forces,
-                         const VectorView<MemorySpaceT>& energy = {}) {
+                         const VectorView<MemorySpaceT>& energy = {},
+                         const VectorView<MemorySpaceT>& hourglassEnergy = {}) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   const bool withEnergy = energy.extent(0) > 0;
+  if (body.kind == ShellElementKind::OnePoint) {
+    const bool withHourglass = hourglassEnergy.extent(0) > 0;
+    const bool gather = body.assembly == ElementForceAssembly::Gather;
+    Kokkos::parallel_for(
+        "perishell::shell::onePointShellForces", queuedRangePolicy(space, 0, body.numElements()),
+        KOKKOS_LAMBDA(const LocalIndex e) {
+          double reference[4][3], current[4][3], rotations[4][3][3], force[shellDofCount];
+          detail::loadElement(body, state, e, reference, current, rotations);
+          const double scale = 0.25 * (body.membraneBendingScale(e, 0) + body.membraneBendingScale(e, 1) +
+                                       body.membraneBendingScale(e, 2) + body.membraneBendingScale(e, 3));
+          const OnePointEnergies elementEnergy =
+              onePointShellForce(reference, current, rotations, body.section, scale, force);
+          if (gather) {
+            for (int r = 0; r < shellDofCount; ++r) body.elementForces(e, r) = force[r];
+            body.elementForces(e, 24) = elementEnergy.strain;
+            body.elementForces(e, 25) = elementEnergy.hourglass;
+            return;
+          }
+          for (int a = 0; a < 4; ++a) {
+            const LocalIndex node = body.quads(e, a);
+            for (int d = 0; d < 6; ++d) Kokkos::atomic_add(&forces(node, d), -force[6 * a + d]);
+            if (withEnergy) Kokkos::atomic_add(&energy(node), 0.25 * elementEnergy.strain);
+            if (withHourglass) Kokkos::atomic_add(&hourglassEnergy(node), 0.25 * elementEnergy.hourglass);
+          }
+        });
+    if (!gather) return;
+    Kokkos::parallel_for(
+        "perishell::shell::gatherOnePointShellForces",
+        queuedRangePolicy(space, 0, static_cast<LocalIndex>(body.nodeElementOffsets.extent(0) - 1)),
+        KOKKOS_LAMBDA(const LocalIndex node) {
+          const RowOffset begin = body.nodeElementOffsets(node), end = body.nodeElementOffsets(node + 1);
+          if (begin == end) return;
+          double sum[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, strain = 0.0, hourglass = 0.0;
+          for (RowOffset k = begin; k < end; ++k) {
+            const LocalIndex entry = body.nodeElementEntries(k), e = entry / 4, corner = entry % 4;
+            for (int d = 0; d < 6; ++d) sum[d] += body.elementForces(e, 6 * corner + d);
+            strain += body.elementForces(e, 24);
+            hourglass += body.elementForces(e, 25);
+          }
+          for (int d = 0; d < 6; ++d) forces(node, d) -= sum[d];
+          if (withEnergy) energy(node) += 0.25 * strain;
+          if (withHourglass) hourglassEnergy(node) += 0.25 * hourglass;
+        });
+    return;
+  }
   Kokkos::parallel_for(
       "perishell::shell::subtractShellForces", queuedRangePolicy(space, 0, body.numElements()),
       KOKKOS_LAMBDA(const LocalIndex e) {
@@ -132,23 +229,35 @@ void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpa
 }
 
 // Per node, the elements' diagonal stiffness: the mean of the three translational and of the
-// three rotational diagonal entries of K_l, summed over the node's elements (for the
-// explicit solver's rotary-inertia scaling, solvers/explicit/nodal_inertia.hpp).
+// three rotational diagonal entries of the element's linear stiffness, summed over the
+// node's elements (for the explicit solver's rotary-inertia scaling,
+// solvers/explicit/nodal_inertia.hpp).
 template <class ExecutionSpaceT, class MemorySpaceT>
 void addShellNodalStiffness(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
                             const VectorView<MemorySpaceT>& translational, const VectorView<MemorySpaceT>& rotational) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
+  const bool onePoint = body.kind == ShellElementKind::OnePoint;
   Kokkos::parallel_for(
       "perishell::shell::addShellNodalStiffness", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numElements()),
       KOKKOS_LAMBDA(const LocalIndex e) {
+        double moving[4] = {0.0, 0.0, 0.0, 0.0}, turning[4] = {0.0, 0.0, 0.0, 0.0};
+        if (onePoint) {
+          double reference[4][3];
+          for (int a = 0; a < 4; ++a)
+            for (int d = 0; d < 3; ++d) reference[a][d] = body.referencePositions(body.quads(e, a), d);
+          const double scale = 0.25 * (body.membraneBendingScale(e, 0) + body.membraneBendingScale(e, 1) +
+                                       body.membraneBendingScale(e, 2) + body.membraneBendingScale(e, 3));
+          onePointShellNodalStiffness(reference, body.section, scale, moving, turning);
+        } else {
+          for (int a = 0; a < 4; ++a)
+            for (int d = 0; d < 3; ++d) {
+              moving[a] += body.localStiffness(e, 6 * a + d, 6 * a + d) / 3.0;
+              turning[a] += body.localStiffness(e, 6 * a + 3 + d, 6 * a + 3 + d) / 3.0;
+            }
+        }
         for (int a = 0; a < 4; ++a) {
-          double moving = 0.0, turning = 0.0;
-          for (int d = 0; d < 3; ++d) {
-            moving += body.localStiffness(e, 6 * a + d, 6 * a + d) / 3.0;
-            turning += body.localStiffness(e, 6 * a + 3 + d, 6 * a + 3 + d) / 3.0;
-          }
-          Kokkos::atomic_add(&translational(body.quads(e, a)), moving);
-          Kokkos::atomic_add(&rotational(body.quads(e, a)), turning);
+          Kokkos::atomic_add(&translational(body.quads(e, a)), moving[a]);
+          Kokkos::atomic_add(&rotational(body.quads(e, a)), turning[a]);
         }
       });
 }
@@ -160,6 +269,8 @@ void assembleShellTangent(const ExecutionSpaceT& space, const ShellBody<MemorySp
                           const pd::PdKinematics<MemorySpaceT>& state, const PatternT& pattern,
                           const VectorView<MemorySpaceT>& values, TangentForm form = TangentForm::Symmetric) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
+  if (body.kind != ShellElementKind::Mitc4)
+    throw std::logic_error("assembleShellTangent: the one-point shell element has no tangent; build MITC4 elements");
   Kokkos::parallel_for(
       "perishell::shell::assembleShellTangent", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numElements()),
       KOKKOS_LAMBDA(const LocalIndex e) {

@@ -46,6 +46,9 @@ struct ExplicitOptions {
   // Unstable when kinetic + strain + dissipated energy exceeds (1 + this) times the energy
   // put in; a stable run stays within a few per cent.
   double energyGrowthLimit = 1.0;
+  // Stop when the one-point shell elements' hourglass energy exceeds this fraction of the
+  // strain energy (docs/explicit.md): the mesh then deforms in modes the element cannot see.
+  double hourglassEnergyLimit = 0.1;
   // Fence after each phase of a step and add its wall time to phaseSeconds() (the paper's
   // Table 3 columns). Costs a synchronisation per phase, so it is off for plain runs.
   bool timePhases = false;
@@ -64,6 +67,7 @@ struct EnergyReport {
   long long step = 0;
   double time = 0.0;
   double kinetic = 0.0, strain = 0.0, fracture = 0.0, damping = 0.0;
+  double hourglass = 0.0;  // the one-point shell elements' hourglass energy, a part of strain
   double externalWork = 0.0, supportWork = 0.0, initial = 0.0;
   double input() const { return initial + externalWork + supportWork; }
   double stored() const { return kinetic + strain + fracture + damping; }
@@ -99,6 +103,7 @@ class CentralDifferenceSolver {
         intact_(pd::makeIntactFlags(body_.bonds, "intact bonds")),
         intactNext_(pd::makeIntactFlags(body_.bonds, "intact bonds next")),
         strainEnergy_("pd strain energy", body_.numNodes()),
+        hourglassEnergy_("shell hourglass energy", body_.numNodes()),
         fractureEnergy_("pd fracture energy", body_.numNodes()),
         externalWork_("pd external work", body_.numNodes()),
         supportWork_("pd support work", body_.numNodes()),
@@ -140,6 +145,7 @@ class CentralDifferenceSolver {
   EnergyReport energies() {
     fillContiguous(space_, forces_, 0.0);
     Kokkos::deep_copy(space_, strainEnergy_, 0.0);
+    Kokkos::deep_copy(space_, hourglassEnergy_, 0.0);
     if (discardedFracture_.extent(0) == 0) {
       discardedFracture_ = VectorView<MemorySpace>("pd fracture energy scratch", body_.numNodes());
       discardedFlags_ = pd::BondFlagView<MemorySpace>("intact bonds scratch", body_.bonds.numBonds());
@@ -249,17 +255,24 @@ class CentralDifferenceSolver {
 
   void computeForces(bool withStrainEnergy) {
     fillContiguous(space_, forces_, 0.0);
-    if (withStrainEnergy) Kokkos::deep_copy(space_, strainEnergy_, 0.0);
+    if (withStrainEnergy) {
+      Kokkos::deep_copy(space_, strainEnergy_, 0.0);
+      Kokkos::deep_copy(space_, hourglassEnergy_, 0.0);
+    }
     const pd::BondForceOutputs<MemorySpace> outputs{
         forces_, withStrainEnergy ? strainEnergy_ : VectorView<MemorySpace>(), fractureEnergy_, intactNext_};
     addInternalForces(state_, outputs);
   }
 
   // The forces bonds and elements exert on the nodes in `state`, added into outputs.forces;
-  // their strain energy into outputs.strainEnergy unless it is empty.
+  // their strain energy into outputs.strainEnergy unless it is empty, and then the
+  // elements' hourglass energy into hourglassEnergy_.
   void addInternalForces(const pd::PdKinematics<MemorySpace>& state, const pd::BondForceOutputs<MemorySpace>& outputs) {
     if (body_.bonds.numBonds() > 0) pd::computeBondForces(space_, options_.forceKernel, body_, state, intact_, outputs);
-    if (shell_) shell::subtractShellForces(space_, *shell_, state, outputs.forces, outputs.strainEnergy);
+    const bool withEnergy = outputs.strainEnergy.extent(0) > 0;
+    if (shell_)
+      shell::subtractShellForces(space_, *shell_, state, outputs.forces, outputs.strainEnergy,
+                                 withEnergy ? hourglassEnergy_ : VectorView<MemorySpace>());
   }
 
   // The leapfrog update of one node's six DOFs; work and dissipation accumulate per node
@@ -352,14 +365,15 @@ class CentralDifferenceSolver {
           for (int k = 0; k < 3; ++k) count += Kokkos::Experimental::isfinite(displacements(node, k)) ? 0 : 1;
         },
         nonFinite);
-    const double sums[6] = {sum(kinetic), sum(strainEnergy_), sum(fractureEnergy_),
-                            sum(externalWork_), sum(supportWork_), sum(dampingWork_)};
+    const double sums[7] = {sum(kinetic),      sum(strainEnergy_), sum(fractureEnergy_), sum(externalWork_),
+                            sum(supportWork_), sum(dampingWork_),  sum(hourglassEnergy_)};
     report.kinetic = sums[0];
     report.strain = sums[1];
     report.fracture = sums[2];
     report.externalWork = sums[3];
     report.supportWork = sums[4];
     report.damping = sums[5];
+    report.hourglass = sums[6];
     nonFinite_ = nonFinite > 0 || !std::isfinite(report.stored()) || !std::isfinite(report.input());
     return report;
   }
@@ -372,7 +386,10 @@ class CentralDifferenceSolver {
     }
     const bool runaway = lastReport_.stored() > (1.0 + options_.energyGrowthLimit) * std::abs(lastReport_.input()) &&
                          lastReport_.stored() > 0.0 && step_ > 0;
-    if (!nonFinite_ && !runaway) return;
+    if (!nonFinite_ && !runaway) {
+      checkHourglassEnergy();
+      return;
+    }
     std::ostringstream message;
     message.precision(4);
     message << "explicit solver: unstable at step " << step_ << " (t = " << time_ << " s): ";
@@ -384,6 +401,21 @@ class CentralDifferenceSolver {
     message << "; dt = " << timeStep_ << " s against an estimated critical step of " << criticalTimeStep_
             << " s (ratio " << timeStep_ / criticalTimeStep_ << "). Reduce solver.dt or leave it out to use "
             << "safety-factor x the estimate.";
+    throw ExplicitInstability(message.str());
+  }
+
+  // The hourglass share is judged once the strain energy is a visible part of the input
+  // (early steps of an impact store little strain energy against much kinetic energy).
+  void checkHourglassEnergy() const {
+    const EnergyReport& e = lastReport_;
+    if (!(e.hourglass > options_.hourglassEnergyLimit * e.strain) || !(e.strain > 1e-3 * std::abs(e.input()))) return;
+    std::ostringstream message;
+    message.precision(3);
+    message << "explicit solver: at step " << step_ << " (t = " << time_ << " s) the shell elements' hourglass energy "
+            << e.hourglass << " J is " << 100.0 * e.hourglass / e.strain << " % of the strain energy (limit "
+            << 100.0 * options_.hourglassEnergyLimit
+            << " %): the one-point elements deform in modes they cannot see. Refine the mesh where loads or "
+               "supports act on single nodes, raise solver.hourglass, or set solver.shell-element: mitc4.";
     throw ExplicitInstability(message.str());
   }
 
@@ -538,7 +570,7 @@ class CentralDifferenceSolver {
   pd::NodalVectorView<MemorySpace> velocities_;
   pd::NodalVectorView<MemorySpace> forces_;
   pd::BondFlagView<MemorySpace> intact_, intactNext_;
-  VectorView<MemorySpace> strainEnergy_, fractureEnergy_, externalWork_, supportWork_, dampingWork_, kineticEnergy_;
+  VectorView<MemorySpace> strainEnergy_, hourglassEnergy_, fractureEnergy_, externalWork_, supportWork_, dampingWork_, kineticEnergy_;
   // Outputs of energies() that must not touch the run's state; allocated on first use.
   VectorView<MemorySpace> discardedFracture_;
   pd::BondFlagView<MemorySpace> discardedFlags_;

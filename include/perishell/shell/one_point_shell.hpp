@@ -1,0 +1,437 @@
+#pragma once
+// The explicit solver's shell element (issue 21, docs/explicit.md "The explicit shell
+// element"): a 4-node shell with one-point quadrature and hourglass control, the
+// Belytschko-Lin-Tsay design (Belytschko, Lin & Tsay 1984) written in total corotational
+// form, so that it is conservative and exactly invariant under rigid motions of any size:
+//  - kinematics as the MITC4 element's (shell/mitc4_shell.hpp, model.md §5): the same
+//    corotational frame, the deformational DOF d (local translations E (x_a - x_c) - X_a and
+//    local rotations log(E R_a E0^T));
+//  - generalised strains at the centre from the uniform gradient B of Flanagan & Belytschko
+//    (1981): membrane, curvature and the drilling mismatch theta_z - omega, with the section
+//    of model.md §4; the transverse shear (gamma = grad w + beta, beta = (theta_y, -theta_x))
+//    is MITC4's (covariant shears tied at the edge midpoints), integrated exactly on a
+//    parallelogram: its value at the centre plus the differences of the opposite edges'
+//    shears, which carry the w-hourglass and the twist of the normals. Every tied shear
+//    vanishes for a Kirchhoff field of constant curvature on any quad, so a thin distorted
+//    plate neither locks nor fails the bending patch test (the one-point B of w would do
+//    both; Belytschko & Leviathan 1994 stabilise the shear the same way);
+//  - hourglass control of the membrane, bending and drilling fields by the
+//    Flanagan-Belytschko vectors gamma_a = (h_a - (h.x) B_xa - (h.y) B_ya)/4,
+//    h = (1, -1, 1, -1), which are orthogonal to every linear field on any quad (so the patch
+//    tests stay exact on distorted meshes). Membrane: the BLT element's stiffness r E t A/8 B.B
+//    (LS-DYNA theory manual, "Belytschko-Lin-Tsay shell"; full integration would lock in
+//    in-plane bending). Bending and drilling: the exact 2x2-point energy of the hourglass
+//    mode (MITC4's, on a parallelogram), as in Belytschko & Leviathan's physical
+//    stabilisation: the BLT bending scaling r E t^3 A/192 B.B is ~100 x softer, and under the
+//    moment of a strongly bent strip the geometric terms of the rotations outweighed it (the
+//    hourglass mode grew without bound in Sze 3.1);
+//  - W = A (1/2 eps.n + 1/2 kappa.m + 1/2 zeta z) + shear energy + hourglass energy, and the
+//    nodal forces are dW/dq exactly: f_local = dW/dd, mapped to the global DOF through the
+//    derivative of d, including the frame's spin (the corotational projector; derived in
+//    docs/explicit.md). No stiffness matrix, no automatic differentiation: about 600 flops
+//    and 40 doubles read per element.
+// The coupling's hybrid section (model.md §4, coupling/morphing.hpp) enters as one factor
+// s on the membrane and bending resultants and on their hourglass stiffnesses: the mean of
+// the element's four Gauss-point factors, i.e. 1 - alphaBar at the centre, which
+// integrates (1 - alphaBar(x)) W exactly on parallelogram elements, as 2x2 Gauss does.
+// DOF order and conventions are the MITC4 element's.
+#include <perishell/shell/mitc4_shell.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace perishell::shell {
+
+// The largest warp the flat one-point element accepts: max |z_a| / sqrt(A), z_a the nodes'
+// distances from the element's mean plane. A flat facet (any cylinder, cone or sphere
+// mesh of lat-long quads) has none; 0.05 is a twist of about 6 degrees across the element.
+constexpr double maxOnePointWarp = 0.05;
+
+// The element's reference constants, recomputed from the four reference positions on
+// every evaluation (flops are cheaper than the memory traffic of storing them).
+struct OnePointReference {
+  ShellReference geometry;  // frame E0 (rows) and the nodes' local coordinates
+  double area;              // A of the flat projection
+  double dNdx[4], dNdy[4];  // the uniform gradient at the centre
+  double hourglass[4];      // Flanagan-Belytschko gamma_a
+  // d(shear)/d(w_a, theta_x_a, theta_y_a) of the four shear measures: gamma_xz, gamma_yz at
+  // the centre, then the opposite edges' covariant shear differences d_xi, d_eta.
+  double shearW[4][4], shearThetaX[4][4], shearThetaY[4][4];
+  // Per shear measure, its weight in int |gamma|^2 dA: A, A, A |J^-1 e_1|^2 / 12, A |J^-1 e_2|^2 / 12.
+  double shearWeight[4];
+  // The gradients of the natural coordinates at the centre, (dxi/dx, dxi/dy) and (deta/dx, deta/dy).
+  double naturalGradient[2][2];
+};
+
+KOKKOS_INLINE_FUNCTION OnePointReference onePointReference(const double referencePositions[4][3]) {
+  OnePointReference r{};
+  r.geometry = shellReference(referencePositions);
+  const auto& x = r.geometry.local;
+  r.area = 0.5 * ((x[2][0] - x[0][0]) * (x[3][1] - x[1][1]) - (x[3][0] - x[1][0]) * (x[2][1] - x[0][1]));
+  const double twiceArea = 2.0 * r.area;
+  for (int a = 0; a < 4; ++a) {
+    const int next = (a + 1) % 4, previous = (a + 3) % 4;
+    r.dNdx[a] = (x[next][1] - x[previous][1]) / twiceArea;
+    r.dNdy[a] = (x[previous][0] - x[next][0]) / twiceArea;
+  }
+  double hx = 0.0, hy = 0.0;
+  for (int a = 0; a < 4; ++a) {
+    const double h = (a % 2 == 0) ? 1.0 : -1.0;
+    hx += h * x[a][0];
+    hy += h * x[a][1];
+  }
+  for (int a = 0; a < 4; ++a) {
+    const double h = (a % 2 == 0) ? 1.0 : -1.0;
+    r.hourglass[a] = 0.25 * (h - hx * r.dNdx[a] - hy * r.dNdy[a]);
+  }
+  // Covariant shears e_xi = gamma . dx/dxi at the edge midpoints (0, +-1), e_eta at (+-1, 0),
+  // averaged to the centre, gamma = J^-1 (e_xi, e_eta) with J at the centre (rows dx/dxi,
+  // dx/deta). Node a's beta enters e_xi through its xi-edge's half tangent, e_eta through
+  // its eta-edge's; its w through its natural coordinates (1/4 xi_a, 1/4 eta_a).
+  const double jacobian[2][2] = {
+      {0.25 * (-x[0][0] + x[1][0] + x[2][0] - x[3][0]), 0.25 * (-x[0][1] + x[1][1] + x[2][1] - x[3][1])},
+      {0.25 * (-x[0][0] - x[1][0] + x[2][0] + x[3][0]), 0.25 * (-x[0][1] - x[1][1] + x[2][1] + x[3][1])}};
+  const double determinant = jacobian[0][0] * jacobian[1][1] - jacobian[0][1] * jacobian[1][0];
+  const double inverse[2][2] = {{jacobian[1][1] / determinant, -jacobian[0][1] / determinant},
+                                {-jacobian[1][0] / determinant, jacobian[0][0] / determinant}};
+  // The differences e_xi(0, 1) - e_xi(0, -1) and e_eta(1, 0) - e_eta(-1, 0): with
+  // e_xi(eta) = centre + eta/2 d_xi (MITC4's linear interpolation), int |gamma|^2 dA over a
+  // parallelogram is A |gamma_centre|^2 + A/12 (|J^-1 e_1|^2 d_xi^2 + |J^-1 e_2|^2 d_eta^2).
+  for (int a = 0; a < 4; ++a) {
+    const double xi = mesh::bilinear::nodeXi(a), eta = mesh::bilinear::nodeEta(a);
+    // The xi-edge (constant eta) and the eta-edge (constant xi) through node a.
+    const int xiEdge[2] = {eta > 0.0 ? 3 : 0, eta > 0.0 ? 2 : 1};
+    const int etaEdge[2] = {xi > 0.0 ? 1 : 0, xi > 0.0 ? 2 : 3};
+    double covariantW[2] = {0.25 * xi, 0.25 * eta}, covariantBeta[2][2];  // [e_xi, e_eta][beta_x, beta_y]
+    for (int k = 0; k < 2; ++k) {
+      covariantBeta[0][k] = 0.125 * (x[xiEdge[1]][k] - x[xiEdge[0]][k]);
+      covariantBeta[1][k] = 0.125 * (x[etaEdge[1]][k] - x[etaEdge[0]][k]);
+    }
+    for (int i = 0; i < 2; ++i) {
+      r.shearW[a][i] = inverse[i][0] * covariantW[0] + inverse[i][1] * covariantW[1];
+      const double betaX = inverse[i][0] * covariantBeta[0][0] + inverse[i][1] * covariantBeta[1][0];
+      const double betaY = inverse[i][0] * covariantBeta[0][1] + inverse[i][1] * covariantBeta[1][1];
+      r.shearThetaY[a][i] = betaX;    // beta_x = theta_y
+      r.shearThetaX[a][i] = -betaY;   // beta_y = -theta_x
+    }
+    // Node a's edge shears count with + on the edge at eta = 1 (xi = 1), - at eta = -1 (xi = -1).
+    const double h = (a % 2 == 0) ? 1.0 : -1.0;
+    for (int i = 0; i < 2; ++i) {
+      const double side = 2.0 * (i == 0 ? eta : xi);  // an edge's shear has twice its weight in the mean
+      r.shearW[a][2 + i] = 0.5 * h;
+      r.shearThetaY[a][2 + i] = side * covariantBeta[i][0];
+      r.shearThetaX[a][2 + i] = -side * covariantBeta[i][1];
+    }
+  }
+  for (int k = 0; k < 2; ++k) {
+    r.naturalGradient[0][k] = inverse[k][0];
+    r.naturalGradient[1][k] = inverse[k][1];
+  }
+  r.shearWeight[0] = r.shearWeight[1] = r.area;
+  r.shearWeight[2] = r.area / 12.0 * (inverse[0][0] * inverse[0][0] + inverse[1][0] * inverse[1][0]);
+  r.shearWeight[3] = r.area / 12.0 * (inverse[0][1] * inverse[0][1] + inverse[1][1] * inverse[1][1]);
+  return r;
+}
+
+// Rejects what a flat one-point element cannot represent: what checkShellElement rejects,
+// and a warp above maxOnePointWarp. `element` names it in the message.
+inline void checkOnePointShellElement(const double referencePositions[4][3], long element) {
+  checkShellElement(referencePositions, element);
+  const OnePointReference r = onePointReference(referencePositions);
+  double warp = 0.0;
+  for (int a = 0; a < 4; ++a) warp = std::max(warp, std::abs(r.geometry.local[a][2]));
+  warp /= std::sqrt(r.area);
+  if (warp > maxOnePointWarp) {
+    std::ostringstream message;
+    message.precision(3);
+    message << "shell element " << element << ": warped by " << warp
+            << " (largest distance of a node from the mean plane over sqrt(area)); the explicit one-point shell "
+               "accepts at most "
+            << maxOnePointWarp << ": refine the mesh there or set solver.shell-element: mitc4";
+    throw std::invalid_argument(message.str());
+  }
+}
+
+namespace detail {
+
+// The section's stiffnesses the one-point element needs, for a membrane-bending factor s.
+struct OnePointSection {
+  double membrane, bending;  // s E t/(1-nu^2), s E t^3/(12 (1-nu^2))
+  double poisson, halfOneMinusPoisson;
+  double transverseShear;    // kappa G t
+  double drilling;           // drillingFactor G t
+  double hourglassMembrane, hourglassDrilling;  // per (gamma_h . field)^2
+  // The bending hourglass energy 1/2 [a b] H [a b]^T, a and b the hourglass amplitudes of
+  // beta_x = theta_y and beta_y = -theta_x: H11, H12, H22.
+  double hourglassBending[3];
+};
+
+KOKKOS_INLINE_FUNCTION OnePointSection onePointSection(const OnePointReference& r, const ShellSection& section,
+                                                       double membraneBendingScale) {
+  const double hourglassCoefficient = section.hourglassCoefficient;
+  const double E = section.youngModulus, nu = section.poissonRatio, t = section.thickness;
+  const double shearModulus = E / (2.0 * (1.0 + nu));
+  double gradientSquared = 0.0;
+  for (int a = 0; a < 4; ++a) gradientSquared += r.dNdx[a] * r.dNdx[a] + r.dNdy[a] * r.dNdy[a];
+  OnePointSection s{};
+  s.membrane = membraneBendingScale * E * t / (1.0 - nu * nu);
+  s.bending = s.membrane * t * t / 12.0;
+  s.poisson = nu;
+  s.halfOneMinusPoisson = 0.5 * (1.0 - nu);
+  s.transverseShear = section.shearCorrection * shearModulus * t;
+  s.drilling = section.drillingFactor * shearModulus * t;
+  s.hourglassMembrane = membraneBendingScale * hourglassCoefficient * E * t * r.area / 8.0 * gradientSquared;
+  // beta = (a, b) xi eta: kappa = eta K1 + xi K2 with K1 = (a xi_x, b xi_y, a xi_y + b xi_x),
+  // K2 likewise with eta's gradient; int eta^2 = int xi^2 = A/3 and int xi eta = 0 on a
+  // parallelogram, so W = A/6 (K1.D K1 + K2.D K2).
+  for (int k = 0; k < 3; ++k) s.hourglassBending[k] = 0.0;
+  for (int g = 0; g < 2; ++g) {
+    const double gx = r.naturalGradient[g][0], gy = r.naturalGradient[g][1];
+    // K = Ma a + Mb b with Ma = (gx, 0, gy), Mb = (0, gy, gx); D = bending [1 nu 0; nu 1 0; 0 0 (1-nu)/2].
+    const double third = r.area / 3.0 * s.bending;
+    s.hourglassBending[0] += third * (gx * gx + s.halfOneMinusPoisson * gy * gy);
+    s.hourglassBending[1] += third * (s.poisson * gx * gy + s.halfOneMinusPoisson * gy * gx);
+    s.hourglassBending[2] += third * (gy * gy + s.halfOneMinusPoisson * gx * gx);
+  }
+  // The drilling penalty's own energy in the mode theta_z = h_a (zero at the centre),
+  // integrated by 2x2 Gauss as the MITC4 element does: drilling A / 9 per (gamma.theta_z)^2.
+  s.hourglassDrilling = s.drilling * r.area / 9.0;
+  return s;
+}
+
+// Generalised strains at the centre and hourglass amplitudes from the deformational DOF.
+struct OnePointStrains {
+  double membrane[3];   // eps_xx eps_yy gamma_xy
+  double curvature[3];  // kappa_xx kappa_yy kappa_xy
+  double shear[4];      // gamma_xz gamma_yz at the centre, d_xi, d_eta
+  double drilling;      // theta_z - omega
+  double hourglass[5];  // gamma_h . (u v theta_x theta_y theta_z)
+};
+
+template <class T>
+KOKKOS_INLINE_FUNCTION void onePointStrains(const OnePointReference& r, const T d[shellDofCount], T membrane[3],
+                                            T curvature[3], T shear[4], T& drilling, T hourglass[5]) {
+  for (int k = 0; k < 3; ++k) membrane[k] = curvature[k] = T(0.0);
+  drilling = T(0.0);
+  for (int k = 0; k < 4; ++k) shear[k] = T(0.0);
+  for (int k = 0; k < 5; ++k) hourglass[k] = T(0.0);
+  for (int a = 0; a < 4; ++a) {
+    const T* n = &d[6 * a];  // u v w theta_x theta_y theta_z
+    const double bx = r.dNdx[a], by = r.dNdy[a];
+    membrane[0] += bx * n[0];
+    membrane[1] += by * n[1];
+    membrane[2] += by * n[0] + bx * n[1];
+    curvature[0] += bx * n[4];                // d beta_x/dx, beta_x = theta_y
+    curvature[1] -= by * n[3];                // d beta_y/dy, beta_y = -theta_x
+    curvature[2] += by * n[4] - bx * n[3];
+    for (int i = 0; i < 4; ++i) shear[i] += r.shearW[a][i] * n[2] + r.shearThetaX[a][i] * n[3] + r.shearThetaY[a][i] * n[4];
+    drilling += 0.25 * n[5] - 0.5 * (bx * n[1] - by * n[0]);
+    for (int k = 0; k < 5; ++k) hourglass[k] += r.hourglass[a] * n[k < 2 ? k : k + 1];
+  }
+}
+
+// The energy of the element's strains, split into the one-point part and the hourglass part.
+template <class T>
+KOKKOS_INLINE_FUNCTION void onePointEnergy(const OnePointReference& r, const OnePointSection& s, const T d[shellDofCount],
+                                           T& pointEnergy, T& hourglassEnergy) {
+  T membrane[3], curvature[3], shear[4], drilling, hourglass[5];
+  onePointStrains(r, d, membrane, curvature, shear, drilling, hourglass);
+  const T membraneEnergy =
+      s.membrane * (membrane[0] * membrane[0] + membrane[1] * membrane[1] + 2.0 * s.poisson * membrane[0] * membrane[1] +
+                    s.halfOneMinusPoisson * membrane[2] * membrane[2]);
+  const T bendingEnergy = s.bending * (curvature[0] * curvature[0] + curvature[1] * curvature[1] +
+                                       2.0 * s.poisson * curvature[0] * curvature[1] +
+                                       s.halfOneMinusPoisson * curvature[2] * curvature[2]);
+  T shearEnergy = T(0.0);
+  for (int i = 0; i < 4; ++i) shearEnergy += r.shearWeight[i] * shear[i] * shear[i];
+  pointEnergy = 0.5 * (r.area * (membraneEnergy + bendingEnergy + s.drilling * drilling * drilling) +
+                       s.transverseShear * shearEnergy);
+  hourglassEnergy = 0.5 * (s.hourglassMembrane * (hourglass[0] * hourglass[0] + hourglass[1] * hourglass[1]) +
+                           s.hourglassBending[0] * hourglass[3] * hourglass[3] -
+                           2.0 * s.hourglassBending[1] * hourglass[3] * hourglass[2] +
+                           s.hourglassBending[2] * hourglass[2] * hourglass[2] +
+                           s.hourglassDrilling * hourglass[4] * hourglass[4]);
+}
+
+// The deformational DOF in a given current frame: E (x_a - x_c) - X_a, log(E R_a E0^T).
+template <class T, class RotationT>
+KOKKOS_INLINE_FUNCTION void onePointDeformation(const OnePointReference& r, const T frame[3][3], const T centroid[3],
+                                                const T x[4][3], const RotationT rotations[4][3][3],
+                                                T d[shellDofCount]) {
+  for (int a = 0; a < 4; ++a) {
+    localTranslation(frame, centroid, x[a], r.geometry.local[a], &d[6 * a]);
+    localRotation(frame, rotations[a], r.geometry.frame, &d[6 * a + 3]);
+  }
+}
+
+// d log(exp(delta) Q) / d delta = J_l^-1(theta), the inverse left Jacobian of SO(3):
+// I - 1/2 [theta] + c [theta]^2, c = 1/theta^2 - (1 + cos theta)/(2 theta sin theta).
+KOKKOS_INLINE_FUNCTION void inverseLeftJacobian(const double theta[3], double J[3][3]) {
+  const double angleSquared = theta[0] * theta[0] + theta[1] * theta[1] + theta[2] * theta[2];
+  double c;
+  if (angleSquared < 1e-4) {
+    c = 1.0 / 12.0 + angleSquared * (1.0 / 720.0 + angleSquared / 30240.0);
+  } else {
+    const double angle = Kokkos::Experimental::sqrt(angleSquared);
+    c = 1.0 / angleSquared -
+        (1.0 + Kokkos::Experimental::cos(angle)) / (2.0 * angle * Kokkos::Experimental::sin(angle));
+  }
+  const double skew[3][3] = {{0.0, -theta[2], theta[1]}, {theta[2], 0.0, -theta[0]}, {-theta[1], theta[0], 0.0}};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double square = skew[i][0] * skew[0][j] + skew[i][1] * skew[1][j] + skew[i][2] * skew[2][j];
+      J[i][j] = (i == j ? 1.0 : 0.0) - 0.5 * skew[i][j] + c * square;
+    }
+}
+
+}  // namespace detail
+
+// The element's energy for any scalar type (the tests differentiate it with core/dual.hpp
+// to check onePointShellForce). `pointEnergy` excludes the hourglass part.
+template <class T, class RotationT>
+KOKKOS_INLINE_FUNCTION void onePointShellEnergy(const double referencePositions[4][3], const T positions[4][3],
+                                                const RotationT rotations[4][3][3], const ShellSection& section,
+                                                double membraneBendingScale, T& pointEnergy, T& hourglassEnergy) {
+  const OnePointReference r = onePointReference(referencePositions);
+  const detail::OnePointSection s = detail::onePointSection(r, section, membraneBendingScale);
+  T frame[3][3], centroid[3];
+  detail::FrameLengths<T> lengths;
+  detail::corotationalFrame(positions, frame, centroid, lengths);
+  T d[shellDofCount];
+  detail::onePointDeformation(r, frame, centroid, positions, rotations, d);
+  detail::onePointEnergy(r, s, d, pointEnergy, hourglassEnergy);
+}
+
+struct OnePointEnergies {
+  double strain;     // the whole elastic energy, hourglass part included [J]
+  double hourglass;  // the hourglass part [J]
+};
+
+// Internal force f = dW/dq (global translations, then spatial moments per node, as
+// shellInternalForce) and the element's energies.
+KOKKOS_INLINE_FUNCTION OnePointEnergies onePointShellForce(const double referencePositions[4][3],
+                                                          const double positions[4][3],
+                                                          const double rotations[4][3][3], const ShellSection& section,
+                                                          double membraneBendingScale, double force[shellDofCount]) {
+  const OnePointReference r = onePointReference(referencePositions);
+  const detail::OnePointSection s = detail::onePointSection(r, section, membraneBendingScale);
+  double E[3][3], centroid[3];
+  detail::FrameLengths<double> lengths;
+  detail::corotationalFrame(positions, E, centroid, lengths);
+  double d[shellDofCount];
+  detail::onePointDeformation(r, E, centroid, positions, rotations, d);
+
+  double membrane[3], curvature[3], shear[4], drilling, hourglass[5];
+  detail::onePointStrains(r, d, membrane, curvature, shear, drilling, hourglass);
+  // dW/d(strain): the resultants per unit length (n, m, z) times the area, and the shears'.
+  const double A = r.area;
+  const double n[3] = {A * s.membrane * (membrane[0] + s.poisson * membrane[1]),
+                       A * s.membrane * (membrane[1] + s.poisson * membrane[0]),
+                       A * s.membrane * s.halfOneMinusPoisson * membrane[2]};
+  const double m[3] = {A * s.bending * (curvature[0] + s.poisson * curvature[1]),
+                       A * s.bending * (curvature[1] + s.poisson * curvature[0]),
+                       A * s.bending * s.halfOneMinusPoisson * curvature[2]};
+  double q[4], shearWork = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    q[i] = s.transverseShear * r.shearWeight[i] * shear[i];
+    shearWork += q[i] * shear[i];
+  }
+  const double z = A * s.drilling * drilling;
+  // Hourglass forces dW/dq for q = (u, v, theta_x, theta_y, theta_z) amplitudes; bending in
+  // (a, b) = (q_theta_y, -q_theta_x).
+  const double* H = s.hourglassBending;
+  const double hourglassForce[5] = {s.hourglassMembrane * hourglass[0], s.hourglassMembrane * hourglass[1],
+                                    -(H[1] * hourglass[3] - H[2] * hourglass[2]), H[0] * hourglass[3] - H[1] * hourglass[2],
+                                    s.hourglassDrilling * hourglass[4]};
+  OnePointEnergies energies{0.0, 0.0};
+  for (int k = 0; k < 5; ++k) energies.hourglass += 0.5 * hourglassForce[k] * hourglass[k];
+  energies.strain = 0.5 * (n[0] * membrane[0] + n[1] * membrane[1] + n[2] * membrane[2] + m[0] * curvature[0] +
+                           m[1] * curvature[1] + m[2] * curvature[2] + shearWork + z * drilling) +
+                    energies.hourglass;
+
+  // Global forces of the local ones with the frame held fixed, F_a = E^T f_a and
+  // M_a = E^T J^-T f_theta_a, and their total moment about the centroid.
+  double moment[3] = {0.0, 0.0, 0.0}, forceSum[3] = {0.0, 0.0, 0.0};
+  for (int a = 0; a < 4; ++a) {
+    const double bx = r.dNdx[a], by = r.dNdy[a], g = r.hourglass[a];
+    double local[6] = {bx * n[0] + by * n[2] + 0.5 * by * z + g * hourglassForce[0],
+                       by * n[1] + bx * n[2] - 0.5 * bx * z + g * hourglassForce[1],
+                       0.0,
+                       -by * m[1] - bx * m[2] + g * hourglassForce[2],
+                       bx * m[0] + by * m[2] + g * hourglassForce[3],
+                       0.25 * z + g * hourglassForce[4]};
+    for (int i = 0; i < 4; ++i) {
+      local[2] += r.shearW[a][i] * q[i];
+      local[3] += r.shearThetaX[a][i] * q[i];
+      local[4] += r.shearThetaY[a][i] * q[i];
+    }
+    double J[3][3], rotational[3];
+    detail::inverseLeftJacobian(&d[6 * a + 3], J);
+    for (int j = 0; j < 3; ++j) rotational[j] = J[0][j] * local[3] + J[1][j] * local[4] + J[2][j] * local[5];
+    for (int k = 0; k < 3; ++k) {
+      force[6 * a + k] = E[0][k] * local[0] + E[1][k] * local[1] + E[2][k] * local[2];
+      force[6 * a + 3 + k] = E[0][k] * rotational[0] + E[1][k] * rotational[1] + E[2][k] * rotational[2];
+      moment[k] += force[6 * a + 3 + k];
+      forceSum[k] += force[6 * a + k];
+    }
+    const double arm[3] = {positions[a][0] - centroid[0], positions[a][1] - centroid[1], positions[a][2] - centroid[2]};
+    double armMoment[3];
+    rotation::cross(arm, &force[6 * a], armMoment);
+    for (int k = 0; k < 3; ++k) moment[k] += armMoment[k];
+  }
+  // The frame turns with the nodes (omega = sum_b G_b dx_b): f_x_b -= G_b^T moment, written
+  // through the diagonals and the edge sum that define the frame (docs/explicit.md), and the
+  // centroid moves with them (f_x_b -= forceSum / 4, zero up to round-off).
+  double mu[3];
+  for (int i = 0; i < 3; ++i) mu[i] = E[i][0] * moment[0] + E[i][1] * moment[1] + E[i][2] * moment[2];
+  const double normalSpin = mu[0] + mu[2] * lengths.alongNormal / lengths.along;
+  double lever[3], diagonal13[3], diagonal24[3], toDiagonal13[3], toDiagonal24[3];
+  for (int k = 0; k < 3; ++k) {
+    lever[k] = mu[1] * E[0][k] - normalSpin * E[1][k];
+    diagonal13[k] = positions[2][k] - positions[0][k];
+    diagonal24[k] = positions[3][k] - positions[1][k];
+  }
+  rotation::cross(diagonal24, lever, toDiagonal13);
+  rotation::cross(lever, diagonal13, toDiagonal24);
+  for (int k = 0; k < 3; ++k) {
+    const double g13 = toDiagonal13[k] / lengths.normal, g24 = toDiagonal24[k] / lengths.normal;
+    const double gAlong = mu[2] / lengths.along * E[1][k];
+    const double shift = 0.25 * forceSum[k];
+    force[k] += g13 + gAlong - shift;
+    force[6 + k] += g24 - gAlong - shift;
+    force[12 + k] += -g13 - gAlong - shift;
+    force[18 + k] += -g24 + gAlong - shift;
+  }
+  return energies;
+}
+
+// The diagonal of the element's linear stiffness at its reference state, as means per node:
+// of the three translational and of the three rotational entries (the explicit solver's
+// rotary-inertia scaling, solvers/explicit/nodal_inertia.hpp).
+KOKKOS_INLINE_FUNCTION void onePointShellNodalStiffness(const double referencePositions[4][3],
+                                                        const ShellSection& section, double membraneBendingScale,
+                                                        double translational[4],
+                                                        double rotational[4]) {
+  const OnePointReference r = onePointReference(referencePositions);
+  const detail::OnePointSection s = detail::onePointSection(r, section, membraneBendingScale);
+  const double A = r.area, shearPart = s.halfOneMinusPoisson;
+  for (int a = 0; a < 4; ++a) {
+    const double bx2 = r.dNdx[a] * r.dNdx[a], by2 = r.dNdy[a] * r.dNdy[a], g2 = r.hourglass[a] * r.hourglass[a];
+    const double uu = A * (s.membrane * (bx2 + shearPart * by2) + 0.25 * s.drilling * by2) + s.hourglassMembrane * g2;
+    const double vv = A * (s.membrane * (by2 + shearPart * bx2) + 0.25 * s.drilling * bx2) + s.hourglassMembrane * g2;
+    const auto shear = [&](const double v[4]) {
+      double sum = 0.0;
+      for (int i = 0; i < 4; ++i) sum += r.shearWeight[i] * v[i] * v[i];
+      return s.transverseShear * sum;
+    };
+    const double ww = shear(r.shearW[a]);
+    const double xx = A * s.bending * (by2 + shearPart * bx2) + shear(r.shearThetaX[a]) + s.hourglassBending[2] * g2;
+    const double yy = A * s.bending * (bx2 + shearPart * by2) + shear(r.shearThetaY[a]) + s.hourglassBending[0] * g2;
+    const double zz = A * s.drilling / 16.0 + s.hourglassDrilling * g2;
+    translational[a] = (uu + vv + ww) / 3.0;
+    rotational[a] = (xx + yy + zz) / 3.0;
+  }
+}
+
+}  // namespace perishell::shell

@@ -1,0 +1,313 @@
+// The explicit one-point shell element (shell/one_point_shell.hpp): its force is the exact
+// gradient of its energy (checked against forward-mode derivatives), rigid motions of any
+// size cost nothing, the force turns with the element, membrane and bending patch tests on
+// the distorted MacNeal-Harder patch are exact, a thin cantilever does not lock, hourglass
+// modes are resisted while linear fields are not, the nodal stiffness diagonal matches the
+// Hessian's, the device gives the host's numbers, and warped elements are refused.
+#include <perishell/core/dual.hpp>
+#include <perishell/core/types.hpp>
+#include <perishell/shell/one_point_shell.hpp>
+#include <shell/element_states.hpp>
+
+#include <iostream>
+#include <string>
+
+namespace one_point_shell_test {
+
+using namespace shell_element_test;
+using D = perishell::Dual<double>;
+using DD = perishell::Dual<perishell::Dual<double>>;
+
+inline double force(const ElementState& state, const shell::ShellSection& section, double f[dofs],
+                    double membraneBendingScale = 1.0) {
+  return shell::onePointShellForce(state.reference, state.positions, state.rotations, section, membraneBendingScale, f)
+      .strain;
+}
+
+// d/de W(q + e v), v = (translations, spatial rotation increments) per node: forward mode,
+// the rotations as exp(e phi) R to second order (exact for the first two derivatives).
+template <class T>
+T energyAlong(const ElementState& state, const shell::ShellSection& section, const double direction[dofs],
+              const double secondDirection[dofs]) {
+  T x[4][3], R[4][3][3];
+  for (int a = 0; a < 4; ++a) {
+    T phi[3];
+    for (int k = 0; k < 3; ++k) {
+      x[a][k] = T(state.positions[a][k]);
+      phi[k] = T(0.0);
+      if constexpr (std::is_same_v<T, D>) {
+        x[a][k].derivative = direction[6 * a + k];
+        phi[k].derivative = direction[6 * a + 3 + k];
+      } else {
+        x[a][k].value.derivative = direction[6 * a + k];
+        x[a][k].derivative.value = secondDirection[6 * a + k];
+        phi[k].value.derivative = direction[6 * a + 3 + k];
+        phi[k].derivative.value = secondDirection[6 * a + 3 + k];
+      }
+    }
+    perishell::rotation::rotateBySpatialIncrementToSecondOrder(phi, state.rotations[a], R[a]);
+  }
+  T point, hourglass;
+  shell::onePointShellEnergy(state.reference, x, R, section, 1.0, point, hourglass);
+  return point + hourglass;
+}
+
+// The element's linear stiffness at its reference state: the Hessian of W.
+inline Eigen::MatrixXd referenceStiffness(const double X[4][3], const shell::ShellSection& section) {
+  ElementState state;
+  for (int a = 0; a < 4; ++a)
+    for (int k = 0; k < 3; ++k) {
+      state.reference[a][k] = state.positions[a][k] = X[a][k];
+      for (int l = 0; l < 3; ++l) state.rotations[a][k][l] = k == l ? 1.0 : 0.0;
+    }
+  Eigen::MatrixXd K(dofs, dofs);
+  for (int i = 0; i < dofs; ++i)
+    for (int j = 0; j <= i; ++j) {
+      double first[dofs] = {}, second[dofs] = {};
+      first[i] = 1.0;
+      second[j] = 1.0;
+      K(i, j) = K(j, i) = energyAlong<DD>(state, section, first, second).derivative.derivative;
+    }
+  return K;
+}
+
+inline Eigen::MatrixXd assemble(const Nodes& nodes, const Quads& quads, const shell::ShellSection& section) {
+  const int n = 6 * static_cast<int>(nodes.size());
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n);
+  for (const auto& quad : quads) {
+    double X[4][3];
+    gather(nodes, quad, X);
+    const Eigen::MatrixXd element = referenceStiffness(X, section);
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) K.block<6, 6>(6 * quad[a], 6 * quad[b]) += element.block<6, 6>(6 * a, 6 * b);
+  }
+  return K;
+}
+
+using Field = std::array<double, 6>;  // ux uy uz theta_x theta_y theta_z
+
+// Boundary nodes (0-3) take the exact linear field, the interior is solved: the largest
+// interior DOF error over the largest exact interior value.
+template <class FieldT>
+double patchError(const FieldT& exact) {
+  const Nodes nodes = macNealHarderNodes();
+  shell::ShellSection section;
+  section.youngModulus = 1e6;
+  section.poissonRatio = 0.25;
+  section.thickness = 0.001;
+  const Eigen::MatrixXd K = assemble(nodes, macNealHarderQuads(), section);
+  Eigen::VectorXd prescribed(24), exactInterior(24);
+  for (int node = 0; node < 8; ++node) {
+    const Field value = exact(nodes[node][0], nodes[node][1]);
+    for (int i = 0; i < 6; ++i) (node < 4 ? prescribed(6 * node + i) : exactInterior(6 * (node - 4) + i)) = value[i];
+  }
+  const Eigen::VectorXd solved = K.block(24, 24, 24, 24).ldlt().solve(-K.block(24, 0, 24, 24) * prescribed);
+  return (solved - exactInterior).cwiseAbs().maxCoeff() / exactInterior.cwiseAbs().maxCoeff();
+}
+
+using HostForces = Kokkos::View<double* [dofs + 2], Kokkos::LayoutRight, Kokkos::HostSpace>;
+
+// One thread per element: the force, then the strain and hourglass energies.
+template <class ExecutionSpaceT>
+HostForces evaluateOnDevice(const HostPositions& referenceHost, const HostPositions& positionsHost,
+                            const HostRotations& rotationsHost, const shell::ShellSection section) {
+  using MemorySpace = typename ExecutionSpaceT::memory_space;
+  const auto references = Kokkos::create_mirror_view_and_copy(MemorySpace{}, referenceHost);
+  const auto positions = Kokkos::create_mirror_view_and_copy(MemorySpace{}, positionsHost);
+  const auto rotations = Kokkos::create_mirror_view_and_copy(MemorySpace{}, rotationsHost);
+  Kokkos::View<double* [dofs + 2], Kokkos::LayoutRight, MemorySpace> out("one-point forces", referenceHost.extent(0));
+  Kokkos::parallel_for(
+      "one_point_shell_test::evaluate", Kokkos::RangePolicy<ExecutionSpaceT>(0, referenceHost.extent(0)),
+      KOKKOS_LAMBDA(const int e) {
+        double X[4][3], x[4][3], R[4][3][3], f[dofs];
+        for (int a = 0; a < 4; ++a)
+          for (int k = 0; k < 3; ++k) {
+            X[a][k] = references(e, a, k);
+            x[a][k] = positions(e, a, k);
+            for (int l = 0; l < 3; ++l) R[a][k][l] = rotations(e, a, k, l);
+          }
+        const shell::OnePointEnergies energies = shell::onePointShellForce(X, x, R, section, 0.7, f);
+        for (int r = 0; r < dofs; ++r) out(e, r) = f[r];
+        out(e, dofs) = energies.strain;
+        out(e, dofs + 1) = energies.hourglass;
+      });
+  return Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, out);
+}
+
+}  // namespace one_point_shell_test
+
+namespace {
+
+using namespace one_point_shell_test;
+
+TEST(TEST_CATEGORY, one_point_force_is_the_exact_energy_gradient) {
+  const ElementState state = stronglyDeformed();
+  const shell::ShellSection section = thickSection();
+  double f[dofs];
+  const double energy = force(state, section, f);
+  EXPECT_GT(energy, 0.0);
+  // Unit directions, then mixed ones.
+  double worst[2] = {0.0, 0.0}, scale[2] = {0.0, 0.0};
+  for (int j = 0; j < dofs; ++j) {
+    double direction[dofs] = {}, unused[dofs] = {};
+    direction[j] = 1.0;
+    const double derivative = energyAlong<D>(state, section, direction, unused).derivative;
+    worst[isRotation(j)] = std::max(worst[isRotation(j)], std::abs(derivative - f[j]));
+    scale[isRotation(j)] = std::max(scale[isRotation(j)], std::abs(f[j]));
+  }
+  double mixedError = 0.0, mixedScale = 0.0;
+  for (int trial = 0; trial < 5; ++trial) {
+    double direction[dofs], unused[dofs] = {}, work = 0.0;
+    for (int j = 0; j < dofs; ++j) {
+      direction[j] = std::sin(1.7 * j + 2.3 * trial);
+      work += f[j] * direction[j];
+    }
+    mixedError = std::max(mixedError, std::abs(energyAlong<D>(state, section, direction, unused).derivative - work));
+    mixedScale = std::max(mixedScale, std::abs(work));
+  }
+  std::cout << "one-point f vs dW/dq (forward mode): relative error forces " << worst[0] / scale[0] << ", moments "
+            << worst[1] / scale[1] << ", mixed directions " << mixedError / mixedScale << "\n";
+  EXPECT_LE(worst[0], 1e-11 * scale[0]);
+  EXPECT_LE(worst[1], 1e-11 * scale[1]);
+  EXPECT_LE(mixedError, 1e-11 * mixedScale);
+}
+
+TEST(TEST_CATEGORY, one_point_rigid_motions_give_zero_force_and_the_force_turns_with_the_element) {
+  const shell::ShellSection section = thickSection();
+  double X[4][3];
+  warpedReference(X);
+  const double length = 1.0, forceScale = section.youngModulus * section.thickness * length;
+  const double halfPi = 1.5707963267948966, skew = halfPi / std::sqrt(14.0);
+  const double rotations[5][3] = {
+      {halfPi, 0, 0}, {0, halfPi, 0}, {0, 0, halfPi}, {skew, 2 * skew, 3 * skew}, {-1.2, 2.0, 0.9}};
+  const double shift[3] = {0.3, -1.2, 2.0};
+  double worst = 0.0;
+  for (const auto& rotationVector : rotations) {
+    double f[dofs];
+    const double energy = force(rigidlyMoved(X, rotationVector, shift), section, f);
+    for (int i = 0; i < dofs; ++i) worst = std::max(worst, std::abs(f[i]) / forceScale);
+    EXPECT_LE(energy, 1e-20 * forceScale * length);
+  }
+  std::cout << "one-point rigid motions: max |f| / (E t L) " << worst << "\n";
+  EXPECT_LE(worst, 1e-10);
+
+  const ElementState state = stronglyDeformed();
+  double f[dofs], rotatedForce[dofs];
+  const double energy = force(state, section, f);
+  double Q[3][3];
+  const ElementState rotated = rigidlyRotated(state, Q);
+  EXPECT_NEAR(force(rotated, section, rotatedForce), energy, 1e-12 * energy);
+  double error = 0.0, largest = 0.0;
+  for (int j = 0; j < dofs; j += 3)
+    for (int i = 0; i < 3; ++i) {
+      error = std::max(error, std::abs(rotatedForce[j + i] - (Q[i][0] * f[j] + Q[i][1] * f[j + 1] + Q[i][2] * f[j + 2])));
+      largest = std::max(largest, std::abs(f[j + i]));
+    }
+  EXPECT_LE(error, 1e-10 * largest);
+}
+
+TEST(TEST_CATEGORY, one_point_patch_tests_are_exact_on_a_distorted_mesh) {
+  // Membrane: a linear in-plane field with theta_z its rigid rotation part.
+  const double membraneError = patchError([](double x, double y) -> Field {
+    const double u = 1e-5 + 1e-3 * (2.0 * x + 0.3 * y), v = -2e-5 + 1e-3 * (0.2 * x - y);
+    return {u, v, 0.0, 0.0, 0.0, 0.5 * 1e-3 * (0.2 - 0.3)};
+  });
+  // Bending: w quadratic, rotations its exact slopes (Kirchhoff): constant curvature.
+  const double a = 1e-3, b = 2e-3, c = 0.5e-3;
+  const double bendingError = patchError([=](double x, double y) -> Field {
+    const double w = 1e-4 + 2e-3 * x - 1e-3 * y + 0.5 * (a * x * x + 2.0 * c * x * y + b * y * y);
+    const double dwdx = 2e-3 + a * x + c * y, dwdy = -1e-3 + c * x + b * y;
+    return {0.0, 0.0, w, dwdy, -dwdx, 0.0};
+  });
+  std::cout << "one-point patch tests (MacNeal-Harder): membrane error " << membraneError << ", bending error "
+            << bendingError << "\n";
+  EXPECT_LT(membraneError, 1e-9);
+  EXPECT_LT(bendingError, 1e-8);
+}
+
+TEST(TEST_CATEGORY, one_point_thin_cantilever_has_no_shear_locking) {
+  // L/t = 1000, regular and distorted (interior nodes shifted by 30 % of a cell).
+  const double regular = cantileverTipRatio(16, 0.0, assemble), fine = cantileverTipRatio(64, 0.0, assemble);
+  const double distorted = cantileverTipRatio(16, 0.3, assemble);
+  std::cout << "one-point cantilever tip / (P L^3 / 3EI): 16 x 1 " << regular << ", 64 x 1 " << fine
+            << ", 16 x 1 distorted " << distorted << "\n";
+  EXPECT_NEAR(regular, 1.0, 0.01);
+  EXPECT_NEAR(fine, 1.0, 0.01);
+  EXPECT_NEAR(distorted, 1.0, 0.03);
+}
+
+TEST(TEST_CATEGORY, one_point_hourglass_modes_are_resisted_and_the_nodal_stiffness_is_the_hessian_diagonal) {
+  double X[4][3];
+  warpedReference(X);
+  for (int a = 0; a < 4; ++a) X[a][2] = 0.0;  // flat: the nodal stiffness is the flat element's
+  const shell::ShellSection section = thickSection();
+  const Eigen::MatrixXd K = referenceStiffness(X, section);
+  // A lone element keeps two zero-energy modes besides the rigid ones: theta_z linear with
+  // zero mean (the drilling penalty is tied at the centre and in the hourglass mode). A mesh
+  // has none: a 3 x 3 patch of distorted elements, free, has exactly the 6 rigid modes.
+  const auto zeroModes = [](const Eigen::MatrixXd& matrix) {
+    const Eigen::VectorXd eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(matrix).eigenvalues();
+    int zeros = 0;
+    // Rigid modes come out at ~1e-17 of the largest eigenvalue; the softest deformation modes
+    // (the drilling penalty's, 1e-3 G t) at ~1e-10.
+    for (int i = 0; i < eigenvalues.size(); ++i) zeros += std::abs(eigenvalues(i)) < 1e-14 * eigenvalues.maxCoeff();
+    return zeros;
+  };
+  Nodes nodes;
+  Quads quads;
+  for (int j = 0; j <= 3; ++j)
+    for (int i = 0; i <= 3; ++i) {
+      const bool interior = i > 0 && i < 3 && j > 0 && j < 3;
+      nodes.push_back({0.1 * i + (interior ? 0.02 * std::sin(3.0 * i + j) : 0.0),
+                       0.1 * j + (interior ? 0.02 * std::cos(2.0 * i - j) : 0.0), 0.0});
+    }
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) quads.push_back({4 * j + i, 4 * j + i + 1, 4 * (j + 1) + i + 1, 4 * (j + 1) + i});
+  const int elementZeros = zeroModes(K), patchZeros = zeroModes(assemble(nodes, quads, section));
+  std::cout << "one-point zero-energy modes: lone element " << elementZeros << ", free 3 x 3 patch " << patchZeros
+            << "\n";
+  EXPECT_EQ(elementZeros, 8);
+  EXPECT_EQ(patchZeros, 6);
+  double translational[4], rotational[4];
+  shell::onePointShellNodalStiffness(X, section, 1.0, translational, rotational);
+  for (int a = 0; a < 4; ++a) {
+    const double moving = (K(6 * a, 6 * a) + K(6 * a + 1, 6 * a + 1) + K(6 * a + 2, 6 * a + 2)) / 3.0;
+    const double turning = (K(6 * a + 3, 6 * a + 3) + K(6 * a + 4, 6 * a + 4) + K(6 * a + 5, 6 * a + 5)) / 3.0;
+    EXPECT_NEAR(translational[a], moving, 1e-10 * moving) << "node " << a;
+    EXPECT_NEAR(rotational[a], turning, 1e-10 * turning) << "node " << a;
+  }
+}
+
+TEST(TEST_CATEGORY, one_point_device_evaluation_matches_host) {
+  const shell::ShellSection section = thickSection();
+  const std::array<ElementState, 3> states = deviceTestStates();
+  const auto [references, positions, rotations] = hostViews(states);
+  const HostForces device = evaluateOnDevice<TEST_EXECSPACE>(references, positions, rotations, section);
+  for (int e = 0; e < 3; ++e) {
+    double f[dofs];
+    const shell::OnePointEnergies energies =
+        shell::onePointShellForce(states[e].reference, states[e].positions, states[e].rotations, section, 0.7, f);
+    const double forceScale = section.youngModulus * section.thickness;
+    for (int r = 0; r < dofs; ++r) EXPECT_NEAR(device(e, r), f[r], 1e-12 * forceScale) << "element " << e << " row " << r;
+    EXPECT_NEAR(device(e, dofs), energies.strain, 1e-12 * std::max(energies.strain, forceScale * 1e-12));
+    EXPECT_NEAR(device(e, dofs + 1), energies.hourglass, 1e-12 * std::max(energies.hourglass, forceScale * 1e-12));
+  }
+}
+
+TEST(TEST_CATEGORY, one_point_warped_and_degenerate_elements_are_refused) {
+  const double twisted[4][3] = {{0, 0, 0}, {1, 0, 0.2}, {1, 1, 0}, {0, 1, 0.2}};  // warp ~0.1
+  try {
+    shell::checkOnePointShellElement(twisted, 12);
+    ADD_FAILURE() << "accepted a warped element";
+  } catch (const std::invalid_argument& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("shell element 12: warped by 0.1 "), std::string::npos) << message;
+    EXPECT_NE(message.find("solver.shell-element: mitc4"), std::string::npos) << message;
+  }
+  const double slightlyTwisted[4][3] = {{0, 0, 0}, {1, 0, 0.04}, {1, 1, 0}, {0, 1, 0.04}};
+  EXPECT_NO_THROW(shell::checkOnePointShellElement(slightlyTwisted, 12));
+  const double bowTie[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  EXPECT_THROW(shell::checkOnePointShellElement(bowTie, 12), std::invalid_argument);
+}
+
+}  // namespace
