@@ -66,13 +66,14 @@ using Solver = perishell::solvers::CentralDifferenceSolver<ExecutionSpaceT>;
 template <class ExecutionSpaceT>
 Solver<ExecutionSpaceT> makeSolver(const MixedPlate& plate,
                                    perishell::solvers::ExternalActions<typename ExecutionSpaceT::memory_space> actions,
-                                   double timeStep = 0.0) {
+                                   double timeStep = 0.0, double hourglassEnergyLimit = 0.1) {
   auto bodies = perishell::coupling::makeCoupledBodies(ExecutionSpaceT{}, plate.shell.mesh, plate.elementIsPd,
                                                        plate.inputs);
   perishell::solvers::ExplicitOptions options;
   options.density = density;
   options.thickness = thickness;
   options.timeStep = timeStep;
+  options.hourglassEnergyLimit = hourglassEnergyLimit;
   return Solver<ExecutionSpaceT>(ExecutionSpaceT{}, bodies.pdBody, bodies.shellElements(), std::move(actions), options);
 }
 
@@ -256,5 +257,25 @@ TEST(TEST_CATEGORY, coupled_host_and_device_runs_agree) {
               difference, difference / largest);
   ASSERT_GT(largest, 0.0);
   EXPECT_LT(difference, 1e-10 * largest);
+  }
+}
+
+TEST(TEST_CATEGORY, coupled_hourglass_energy_past_its_bound_stops_the_run) {
+  using namespace coupled_dynamics_test;
+  // The vibrating CCM plate stores ~1e-4 of its strain energy in hourglass modes; a bound
+  // below that must stop the run with a message naming the hourglass energy.
+  const auto plate = makeMixedPlate(12, 12, 0.2, Zone::None, Element::OnePoint);
+  auto solver = makeSolver<TEST_EXECSPACE>(
+      plate, perishell::solvers::makeFreeActions<TEST_MEMSPACE>(plate.shell.mesh.numNodes()), 0.0, 1e-9);
+  startVibration(solver, plate);
+  try {
+    for (int s = 0; s < 1000; ++s) solver.step();
+    FAIL() << "a hourglass share above 1e-9 ran 1000 steps undetected";
+  } catch (const perishell::solvers::ExplicitInstability& error) {
+    const std::string message = error.what();
+    std::printf("caught at step %lld: %s\n", solver.stepIndex(), message.c_str());
+    EXPECT_NE(message.find("hourglass energy"), std::string::npos) << message;
+    EXPECT_NE(message.find("solver.shell-element: mitc4"), std::string::npos) << message;
+    EXPECT_LE(solver.stepIndex(), 200);
   }
 }

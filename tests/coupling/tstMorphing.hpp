@@ -36,7 +36,8 @@ struct CoupledPlate {
 // A 36 x 36 mm plate, dx = 1 mm, delta = 3 mm; PD elements: a band 6 mm wide across the
 // middle (centroid x in [15, 21] mm) or a disc of radius 4 mm at the centre.
 CoupledPlate makeCoupledPlate(double poissonRatio, TransitionProfile profile, Zone zone, double width = 0.0,
-                              double bandHalfWidth = 3.0 * spacing) {
+                              double bandHalfWidth = 3.0 * spacing,
+                              perishell::shell::ShellElementKind kind = perishell::shell::ShellElementKind::Mitc4) {
   CoupledPlate plate;
   plate.shell = perishell::mesh::makePlate(cells * spacing, cells * spacing, spacing);
   const auto& mesh = plate.shell.mesh;
@@ -57,6 +58,7 @@ CoupledPlate makeCoupledPlate(double poissonRatio, TransitionProfile profile, Zo
   inputs.horizon = horizonFactor * spacing;
   inputs.gridSpacing = spacing;
   inputs.transition = {width, profile};
+  inputs.shellElement = kind;
   plate.bodies = perishell::coupling::makeCoupledBodies(TEST_EXECSPACE{}, mesh, plate.elementIsPd, inputs);
   return plate;
 }
@@ -66,21 +68,19 @@ struct Field {
   std::function<std::array<double, 3>(double, double)> displacement, rotation;
 };
 
-// Shell energy (sum of element energies) and internal forces added into `forces`.
+// Shell energy (sum of element energies) and internal forces (of either element kind): the
+// solvers' kernel subtracts them from the zeroed `forces`.
 double shellEnergyAndForces(const perishell::shell::ShellBody<MemorySpace>& body,
                             const perishell::pd::PdKinematics<MemorySpace>& state,
                             const perishell::pd::NodalVectorView<MemorySpace>& forces) {
+  perishell::VectorView<MemorySpace> energies("shell energy per node", forces.extent(0));
+  perishell::shell::subtractShellForces(TEST_EXECSPACE{}, body, state, forces, energies);
   double energy = 0.0;
   Kokkos::parallel_reduce(
-      "morphing_test::shellEnergy", Kokkos::RangePolicy<TEST_EXECSPACE>(0, body.numElements()),
-      KOKKOS_LAMBDA(const LocalIndex e, double& sum) {
-        double reference[4][3], current[4][3], rotations[4][3][3], K[24][24], force[24];
-        perishell::shell::detail::loadElement(body, state, e, reference, current, rotations);
-        for (int r = 0; r < 24; ++r)
-          for (int s = 0; s < 24; ++s) K[r][s] = body.localStiffness(e, r, s);
-        sum += perishell::shell::shellInternalForce(reference, current, rotations, K, force);
-        for (int a = 0; a < 4; ++a)
-          for (int d = 0; d < 6; ++d) Kokkos::atomic_add(&forces(body.quads(e, a), d), force[6 * a + d]);
+      "morphing_test::shellEnergy", Kokkos::RangePolicy<TEST_EXECSPACE>(0, forces.extent(0)),
+      KOKKOS_LAMBDA(const int node, double& sum) {
+        sum += energies(node);
+        for (int d = 0; d < 6; ++d) forces(node, d) = -forces(node, d);
       },
       energy);
   return energy;
@@ -305,18 +305,22 @@ TEST(TEST_CATEGORY, morphing_degenerates_to_pure_models) {
 
 TEST(TEST_CATEGORY, morphing_stores_the_classical_energy_and_cubic_beats_linear_on_ghost_forces) {
   using namespace morphing_test;
+  using Element = perishell::shell::ShellElementKind;
+  for (const Element kind : {Element::Mitc4, Element::OnePoint})
   for (const Zone zone : {Zone::Band, Zone::Disc})
     for (const double nu : {0.2, 0.33}) {
       Ghost worst[2] = {{0, 0}, {0, 0}};
       for (const auto profile : {TransitionProfile::Cubic, TransitionProfile::Linear}) {
-        const auto plate = makeCoupledPlate(nu, profile, zone);
+        const auto plate = makeCoupledPlate(nu, profile, zone, 0.0, 3.0 * spacing, kind);
         for (const State& state : states) {
           const auto evaluation = evaluate(plate, fieldOf(state));
           const double classical = classicalEnergy(state, nu);
           const double error = (evaluation.pdEnergy + evaluation.shellEnergy) / classical - 1.0;
           const Ghost ghost = ghostForces(plate, state, evaluation, nu);
-          std::printf("%s nu=%.2f %-6s %-9s W_pd/W=%.4f (W_pd+W_ccm)/W_classical-1=%+.3e ghost force %.3e moment %.3e\n",
-                      zone == Zone::Band ? "band" : "disc", nu, profileName(profile), state.name,
+          std::printf("%s %s nu=%.2f %-6s %-9s W_pd/W=%.4f (W_pd+W_ccm)/W_classical-1=%+.3e ghost force %.3e moment "
+                      "%.3e\n",
+                      kind == Element::Mitc4 ? "MITC4" : "one-point", zone == Zone::Band ? "band" : "disc", nu,
+                      profileName(profile), state.name,
                       evaluation.pdEnergy / classical, error, ghost.force, ghost.moment);
           EXPECT_LT(std::abs(error), 0.01) << state.name << " " << profileName(profile) << " nu " << nu;
           const int p = profile == TransitionProfile::Cubic ? 0 : 1;

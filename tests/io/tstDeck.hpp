@@ -807,3 +807,25 @@ TEST(TEST_CATEGORY, deck_zones_adaptive_values_and_rules) {
   };
   expectDeckErrors(cases);
 }
+
+TEST(TEST_CATEGORY, deck_explicit_shell_element_and_hourglass_keys) {
+  const std::string explicitSolver = "    type: explicit\n    steps: 10\n";
+  const Deck plain = parseDeck(edited(baseDeck, {{"    type: implicit\n    increments: 10\n", explicitSolver}}),
+                               "plain.yaml");
+  EXPECT_EQ(plain.solver.explicitSettings.shellElement, deck::ExplicitSettings::ShellElement::OnePoint);
+  EXPECT_DOUBLE_EQ(plain.solver.explicitSettings.hourglassCoefficient, 0.1);
+  const Deck given = parseDeck(
+      edited(baseDeck, {{"    type: implicit\n    increments: 10\n", explicitSolver + "    shell-element: mitc4\n    hourglass: 0.05\n"}}),
+      "given.yaml");
+  EXPECT_EQ(given.solver.explicitSettings.shellElement, deck::ExplicitSettings::ShellElement::Mitc4);
+  EXPECT_DOUBLE_EQ(given.solver.explicitSettings.hourglassCoefficient, 0.05);
+  const std::vector<BadDeck> cases{
+      {"unknown element", {{"    type: implicit\n    increments: 10\n", explicitSolver + "    shell-element: blt\n"}},
+       "solver.shell-element", {"blt", "one-point", "mitc4"}},
+      {"hourglass zero", {{"    type: implicit\n    increments: 10\n", explicitSolver + "    hourglass: 0\n"}},
+       "solver.hourglass", {"must lie in (0, 1]", "got 0"}},
+      {"implicit", {{"    increments: 10\n", "    increments: 10\n    shell-element: one-point\n"}},
+       "solver.shell-element", {"key not allowed for solver type implicit"}},
+  };
+  expectDeckErrors(cases);
+}
