@@ -9,8 +9,9 @@
 # APP   the perishell executable of the build to measure (OpenMP or CUDA preset)
 # CASE  pressed  - 4.2.1 pressed plate (implicit), ratios 0, 0.25, 0.5, 0.75, 1; the zone
 #                  grows from the middle of the clamped edge (apps/cases/pressed_plate_4_2_1.yaml)
-#       steel    - 4.2.2 steel plate (explicit), ratios 0.25, 0.5, 0.75, 1 (its pre-crack must
-#                  lie in PD); the zone grows from the crack centre
+#       steel    - 4.2.2 steel plate (explicit), ratios 0, 0.25, 0.5, 0.75, 1; the zone grows
+#                  from the crack centre; at 0 the model is all CCM and has no pre-crack (a
+#                  pre-crack must lie in PD)
 # LIMIT to time a slow backend in less time: steel - stop after this many steps (the load
 #       ramp is unchanged; default the deck's 50,000); pressed - the grid spacing [m]
 #       (default the deck's 0.5e-3).
@@ -27,7 +28,7 @@ trap 'rm -rf "$work"' EXIT
 
 case $case in
   pressed) base=$cases/pressed_plate_4_2_1.yaml ratios="0 0.25 0.5 0.75 1" ;;
-  steel) base=$cases/steel_plate_4_2_2.yaml ratios="0.25 0.5 0.75 1" ;;
+  steel) base=$cases/steel_plate_4_2_2.yaml ratios="0 0.25 0.5 0.75 1" ;;
   *) echo "pd_ratio_sweep: unknown case '$case' (pressed or steel)" >&2; exit 2 ;;
 esac
 
@@ -40,9 +41,14 @@ deck_for() {
       grep -q "target: $ratio\$" "$deck" || { echo "pd_ratio_sweep: $base has no 'target: 0.5' line" >&2; exit 1; }
       if [[ -n $limit ]]; then sed -i -e "s/^    spacing: 0.5e-3$/    spacing: $limit/" "$deck"; fi ;;
     steel)
-      sed -e "s/^    default: pd$/    default: ccm\n    pd-ratio: {target: $ratio, around: {crack-centre: [0.1015, 0.1015, 0.0]}}/" \
-        "$base" > "$deck"
-      grep -q "pd-ratio: {target: $ratio" "$deck" || { echo "pd_ratio_sweep: $base has no 'default: pd' line" >&2; exit 1; }
+      if [[ $ratio == 0 ]]; then
+        sed -e "s/^    default: pd$/    default: ccm/" "$base" | awk '/^    pre-cracks:/ {skip = 1; next} skip && /^      / {next} {skip = 0; print}' > "$deck"
+        grep -q "default: ccm" "$deck" || { echo "pd_ratio_sweep: $base has no 'default: pd' line" >&2; exit 1; }
+      else
+        sed -e "s/^    default: pd$/    default: ccm\n    pd-ratio: {target: $ratio, around: {crack-centre: [0.1015, 0.1015, 0.0]}}/" \
+          "$base" > "$deck"
+        grep -q "pd-ratio: {target: $ratio" "$deck" || { echo "pd_ratio_sweep: $base has no 'default: pd' line" >&2; exit 1; }
+      fi
       if [[ -n $limit ]]; then sed -i -e "s/^    steps: 50000$/    steps: $limit/" "$deck"; fi ;;
   esac
   echo "$deck"
@@ -63,7 +69,7 @@ for ratio in $ratios; do
     per_step=$(awk -v s="$seconds" -v n="$per_step" 'BEGIN {printf "%.4g", s / n}')
     result=$(awk '/max displacement/ {print $3}' "$log")
   else
-    shells=$(grep -o 'bonds, [0-9]* shell elements' "$log" | grep -o '[0-9]*')
+    shells=$(grep -oE 'bonds, [0-9]+' "$log" | head -1 | grep -oE '[0-9]+')
     bonds=$(grep -o 'PD nodes, [0-9]* bonds' "$log" | grep -o '[0-9]*' | tail -1)
     per_step=$(grep -o '[0-9.e+-]* s per step' "$log" | head -1 | awk '{print $1}')
     result=$(awk '/broken bonds/ {print $3}' "$log")

@@ -276,9 +276,8 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   const long long totalSteps = std::min(deckSteps, runOptions.maxSteps.value_or(deckSteps));
   const double setupSeconds = fencedSecondsSince(space, setupStart);
   log << "explicit: " << bodies.pdNodes.extent(0) << " PD nodes, " << body.bonds.numBonds() << " bonds, "
-      << solver.numElements()
-      << (settings.shellElement == deck::ExplicitSettings::ShellElement::OnePoint ? " one-point" : " MITC4")
-      << " shell elements on "
+      << solver.numElements() << " shell elements ("
+      << (settings.shellElement == deck::ExplicitSettings::ShellElement::OnePoint ? "one-point" : "MITC4") << ") on "
       << ExecutionSpaceT::name() << "; dt = " << solver.timeStep() << " s (critical estimate "
       << solver.criticalTimeStep() << " s), " << totalSteps << " steps to t = " << totalSteps * solver.timeStep()
       << " s; setup " << formatSeconds(setupSeconds) << "\n";
