@@ -127,9 +127,10 @@ HostForces evaluateOnDevice(const HostPositions& referenceHost, const HostPositi
             for (int l = 0; l < 3; ++l) R[a][k][l] = rotations(e, a, k, l);
           }
         const shell::OnePointEnergies energies = shell::onePointShellForce(X, x, R, section, 0.7, f);
-        for (int r = 0; r < dofs; ++r) out(e, r) = f[r];
-        out(e, dofs) = energies.strain;
-        out(e, dofs + 1) = energies.hourglass;
+        // Literal columns: a namespace-scope constexpr bound by reference is not visible in device code.
+        for (int r = 0; r < 24; ++r) out(e, r) = f[r];
+        out(e, 24) = energies.strain;
+        out(e, 25) = energies.hourglass;
       });
   return Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, out);
 }
