@@ -140,12 +140,16 @@ TEST(TEST_CATEGORY, implicit_run_with_a_blown_up_state_stops_naming_increment_qu
     ADD_FAILURE() << "the run ended normally:\n" << log.str();
   } catch (const perishell::solvers::RunStateError& error) {
     const std::string message = error.what();
+    // One of the two loaded corners (they move alike, to round-off).
     EXPECT_EQ(message.rfind("implicit solver: increment 1 of 2 (load factor 0.5): the largest displacement is "
-                            "|u| = 35.39 m at the node at [0.02, 0, 0] m (more than 1000 x the model's size). Likely "
-                            "cause: the loads (the largest load is loads.pull.value = 1e+15 Pa), or supports that "
-                            "leave the model free to move. This state was not written",
+                            "|u| = 35.39 m at the node at [0.02, ",
                             0),
               0u)
+        << message;
+    EXPECT_NE(message.find(", 0] m (more than 1000 x the model's size). Likely cause: the loads (the largest load is "
+                           "loads.pull.value = 1e+15 Pa), or supports that leave the model free to move. This state "
+                           "was not written"),
+              std::string::npos)
         << message;
   }
   EXPECT_EQ(gridsIn(directory.path() + "/results.xmf"), 1);  // the initial state only
