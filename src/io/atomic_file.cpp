@@ -32,11 +32,11 @@ void fsyncFile(const std::string& path) {
   closeChecked(descriptor, path);
 }
 
-void writeAll(int descriptor, const std::string& contents, const std::string& path) {
+void writeAll(int descriptor, const std::string& contents, const std::string& path, off_t offset = -1) {
   const char* next = contents.data();
   std::size_t left = contents.size();
   while (left > 0) {
-    const ssize_t written = ::write(descriptor, next, left);
+    const ssize_t written = offset < 0 ? ::write(descriptor, next, left) : ::pwrite(descriptor, next, left, offset);
     if (written < 0) {
       if (errno == EINTR) continue;
       const int error = errno;
@@ -45,6 +45,7 @@ void writeAll(int descriptor, const std::string& contents, const std::string& pa
     }
     next += written;
     left -= static_cast<std::size_t>(written);
+    if (offset >= 0) offset += written;
   }
 }
 
@@ -75,6 +76,30 @@ void writeFileAtomically(const std::string& path, const std::string& contents) {
     writeAll(descriptor, contents, temporary);
     closeChecked(descriptor, temporary);
   });
+}
+
+void replaceFileTail(const std::string& path, std::size_t offset, const std::string& previousTail,
+                     const std::string& newTail) {
+  const int descriptor = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+  if (descriptor < 0) throwSystemError("cannot open", path, errno);
+  const int restoreDescriptor = ::dup(descriptor);  // writeAll closes the one it fails on
+  try {
+    writeAll(descriptor, newTail, path, static_cast<off_t>(offset));
+    if (::fdatasync(descriptor) != 0) {
+      const int error = errno;
+      ::close(descriptor);
+      throwSystemError("fsync failed for", path, error);
+    }
+    closeChecked(descriptor, path);
+  } catch (...) {
+    if (restoreDescriptor >= 0) {
+      if (::ftruncate(restoreDescriptor, static_cast<off_t>(offset)) == 0)
+        (void)::pwrite(restoreDescriptor, previousTail.data(), previousTail.size(), static_cast<off_t>(offset));
+      ::close(restoreDescriptor);
+    }
+    throw;
+  }
+  if (restoreDescriptor >= 0) ::close(restoreDescriptor);
 }
 
 }  // namespace perishell::io

@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <set>
 #include <stdexcept>
@@ -264,13 +265,38 @@ void XdmfTimeSeriesWriter::writeStep(double time, const std::vector<NodalField>&
     }
   });
 
-  std::vector<StepRecord> steps = steps_;
-  steps.push_back(std::move(record));
-  writeFileAtomically(xdmfPath(), xdmfText(steps));
-  steps_ = std::move(steps);
+  // The first step writes the whole .xmf; later ones replace its closing tags by their grid
+  // and the closing tags, so each step costs its own grid, and the file is complete XML
+  // after every step. A file whose size is not what this writer left (changed by hand) is
+  // rewritten whole.
+  const std::string closing = xdmfClosing();
+  const std::string grid = xdmfGrid(step, record);
+  std::error_code sizeError;
+  const auto sizeOnDisk = step > 0 ? std::filesystem::file_size(xdmfPath(), sizeError) : 0;
+  if (step > 0 && !sizeError && sizeOnDisk == xdmfBytes_) {
+    replaceFileTail(xdmfPath(), xdmfBytes_ - closing.size(), closing, grid + closing);
+    xdmfBytes_ += grid.size();
+  } else {
+    std::string text = xdmfHeader();
+    for (std::size_t earlier = 0; earlier < steps_.size(); ++earlier)
+      text += xdmfGrid(static_cast<int>(earlier), steps_[earlier]);
+    text += grid + closing;
+    writeFileAtomically(xdmfPath(), text);
+    xdmfBytes_ = text.size();
+  }
+  steps_.push_back(std::move(record));
 }
 
-std::string XdmfTimeSeriesWriter::xdmfText(const std::vector<StepRecord>& steps) const {
+std::string XdmfTimeSeriesWriter::xdmfHeader() const {
+  return "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n"
+         "<Xdmf Version=\"3.0\">\n"
+         "  <Domain>\n"
+         "    <Grid Name=\"" + baseName_ + "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+}
+
+std::string XdmfTimeSeriesWriter::xdmfClosing() { return "    </Grid>\n  </Domain>\n</Xdmf>\n"; }
+
+std::string XdmfTimeSeriesWriter::xdmfGrid(int step, const StepRecord& record) const {
   const std::string nodes = std::to_string(numNodes_);
   const std::string elements = std::to_string(numElements_);
   const std::string meshFile = baseName_ + "_mesh.h5";
@@ -279,34 +305,25 @@ std::string XdmfTimeSeriesWriter::xdmfText(const std::vector<StepRecord>& steps)
     return "          <DataItem Dimensions=\"" + dimensions + "\" NumberType=\"" + numberType +
            "\" Precision=\"" + precision + "\" Format=\"HDF\">" + reference + "</DataItem>\n";
   };
-  std::string text = "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n";
-  text += "<Xdmf Version=\"3.0\">\n";
-  text += "  <Domain>\n";
-  text += "    <Grid Name=\"" + baseName_ + "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
-  for (std::size_t step = 0; step < steps.size(); ++step) {
-    const std::string stepFile = stepFileName(static_cast<int>(step));
-    text += "      <Grid Name=\"step_" + std::to_string(step) + "\" GridType=\"Uniform\">\n";
-    text += "        <Time Value=\"" + formatDouble(steps[step].time) + "\"/>\n";
-    // The mesh's DataItems repeat in every grid (rather than XInclude'd): plain, and the
-    // heavy data stay in the one mesh file.
-    text += "        <Topology TopologyType=\"Quadrilateral\" NumberOfElements=\"" + elements + "\">\n";
-    text += dataItem(elements + " 4", "Int", "4", meshFile + ":/topology");
-    text += "        </Topology>\n";
-    text += "        <Geometry GeometryType=\"XYZ\">\n";
-    text += dataItem(nodes + " 3", "Float", "8", meshFile + ":/geometry");
-    text += "        </Geometry>\n";
-    for (const FieldRecord& field : steps[step].fields) {
-      const bool vector = field.components == 3;
-      text += "        <Attribute Name=\"" + field.name + "\" AttributeType=\"" +
-              (vector ? "Vector" : "Scalar") + "\" Center=\"Node\">\n";
-      text += dataItem(vector ? nodes + " 3" : nodes, "Float", "8", stepFile + ":/fields/" + field.name);
-      text += "        </Attribute>\n";
-    }
-    text += "      </Grid>\n";
+  const std::string stepFile = stepFileName(step);
+  std::string text = "      <Grid Name=\"step_" + std::to_string(step) + "\" GridType=\"Uniform\">\n";
+  text += "        <Time Value=\"" + formatDouble(record.time) + "\"/>\n";
+  // The mesh's DataItems repeat in every grid (rather than XInclude'd): plain, and the
+  // heavy data stay in the one mesh file.
+  text += "        <Topology TopologyType=\"Quadrilateral\" NumberOfElements=\"" + elements + "\">\n";
+  text += dataItem(elements + " 4", "Int", "4", meshFile + ":/topology");
+  text += "        </Topology>\n";
+  text += "        <Geometry GeometryType=\"XYZ\">\n";
+  text += dataItem(nodes + " 3", "Float", "8", meshFile + ":/geometry");
+  text += "        </Geometry>\n";
+  for (const FieldRecord& field : record.fields) {
+    const bool vector = field.components == 3;
+    text += "        <Attribute Name=\"" + field.name + "\" AttributeType=\"" + (vector ? "Vector" : "Scalar") +
+            "\" Center=\"Node\">\n";
+    text += dataItem(vector ? nodes + " 3" : nodes, "Float", "8", stepFile + ":/fields/" + field.name);
+    text += "        </Attribute>\n";
   }
-  text += "    </Grid>\n";
-  text += "  </Domain>\n";
-  text += "</Xdmf>\n";
+  text += "      </Grid>\n";
   return text;
 }
 

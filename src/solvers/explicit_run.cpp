@@ -1,4 +1,5 @@
 #include <perishell/io/csv_history.hpp>
+#include <perishell/io/output_directory.hpp>
 #include <perishell/io/progress.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/nodal_loads.hpp>
@@ -7,6 +8,7 @@
 #include <perishell/solvers/explicit/explicit_run.hpp>
 #include <perishell/solvers/history_columns.hpp>
 #include <perishell/solvers/model_actions.hpp>
+#include <perishell/solvers/state_check.hpp>
 
 #include <algorithm>
 #include <array>
@@ -139,7 +141,8 @@ class RunOutput {
     history_->flush();
   }
 
-  void appendHistory(Solver& solver) {
+  // energy: the row's state's (Solver::checkState(), which also leaves its forces for the reactions).
+  void appendHistory(Solver& solver, const EnergyReport& energy) {
     const auto& deck = model_.deck;
     std::vector<double> row = {double(solver.stepIndex()), solver.time()};
     for (const auto& curve : curves_) row.push_back(deck::evaluateCurve(*deck.findCurve(curve), solver.time()));
@@ -148,24 +151,15 @@ class RunOutput {
       if (displacements.extent(0) == 0) displacements = hostDisplacements();
       return displacements;
     };
-    // energies() evaluates the forces of the row's state (a step leaves those of the state before).
-    std::optional<EnergyReport> energy;
-    auto currentEnergies = [&] {
-      if (!energy) energy = solver.energies();
-      return *energy;
-    };
     for (const auto quantity : deck.output.history) {
       switch (quantity) {
         case deck::HistoryQuantity::Energy: {
-          const auto e = currentEnergies();
+          const auto& e = energy;
           row.insert(row.end(),
                      {e.kinetic, e.strain, e.fracture, e.damping, e.externalWork, e.supportWork, e.balanceError()});
           break;
         }
-        case deck::HistoryQuantity::Reactions:
-          currentEnergies();
-          shared_.appendReactions(outOfBalance(), row);
-          break;
+        case deck::HistoryQuantity::Reactions: shared_.appendReactions(outOfBalance(), row); break;
         case deck::HistoryQuantity::BrokenBonds: row.push_back(double(solver.brokenBonds())); break;
         case deck::HistoryQuantity::CrackTip: appendCrackTip(solver.time(), row); break;
         case deck::HistoryQuantity::LoadPoints: shared_.appendLoadPoints(currentDisplacements(), row); break;
@@ -237,12 +231,37 @@ class RunOutput {
   double lastTipTime_ = -1.0, lastTipDistance_ = 0.0;
 };
 
+// Stops the run on a non-finite, runaway or blown-up state (docs/reliability.md), naming the
+// step, the quantity and the deck's likely cause; the files hold the steps before.
+template <class Solver>
+void requireHealthyState(const model::Model& model, const Solver& solver, const typename Solver::StateCheck& check,
+                         long long step, double time) {
+  const auto extent = displacementExtent(
+      model, Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.kinematics().displacements));
+  if (check.healthy() && !extent.blownUp()) return;
+  std::ostringstream message;
+  message.precision(4);
+  message << "explicit solver: unstable at step " << step << " (t = " << time << " s): ";
+  if (extent.finite && !check.finite)
+    message << "the energies are no longer finite; ";
+  else if (extent.finite && check.runaway)
+    message << "the stored energy " << check.energy.stored() << " J exceeds the work done on the body "
+            << check.energy.input() << " J; ";
+  message << extent.describe();
+  message << ". Likely cause: " << explicitBlowUpCause(model.deck, solver.timeStep(), solver.criticalTimeStep())
+          << ". This state was not written; the result files hold the steps before it.";
+  throw ExplicitInstability(message.str());
+}
+
 template <class ExecutionSpaceT>
 ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Model& model, const RunOptions& runOptions,
                                  std::ostream& log) {
   requireRunnableModel(model);
   using Clock = std::chrono::steady_clock;
   const auto& deck = model.deck;
+  const std::string directory = runOptions.outputDirectory.empty() ? deck.output.directory : runOptions.outputDirectory;
+  // Before the set-up: a directory another run holds is refused at once.
+  const io::OutputDirectoryLock outputLock(directory, log);
   const auto& settings = deck.solver.explicitSettings;
   const auto setupStart = Clock::now();
   // Before the solver's set-up, so that a probe off the shell stops the run at once.
@@ -291,19 +310,26 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
     log << "warning: solver.dt is " << solver.timeStep() / solver.criticalTimeStep()
         << " x the estimated critical step; the run is expected to go unstable\n";
 
-  const std::string directory = runOptions.outputDirectory.empty() ? deck.output.directory : runOptions.outputDirectory;
   // The run's wall time starts with the first output, so total = setup + run.
   const auto runStart = Clock::now();
   auto outputStart = runStart;
   RunOutput<ExecutionSpaceT> output(model, directory, solver, historyColumns);
   output.writeFields();
-  output.appendHistory(solver);
+  output.appendHistory(solver, solver.checkState().energy);
   double outputSeconds = fencedSecondsSince(space, outputStart), adaptiveSeconds = 0.0;
   io::ProgressReporter progress(totalSteps, log);
   const long long fieldEvery = deck.output.every, historyEvery = deck.output.historyEvery;
   long long switches = 0;
   while (solver.stepIndex() < totalSteps) {
-    solver.step();
+    try {
+      solver.step();
+    } catch (const ExplicitInstability&) {
+      // The monitor (step() advanced the state, not yet the counter) names solver.dt whether or
+      // not the deck sets it: the diagnosis in the deck's terms replaces its message.
+      requireHealthyState(model, solver, solver.checkState(), solver.stepIndex() + 1,
+                          solver.time() + solver.timeStep());
+      throw;
+    }
     const long long step = solver.stepIndex();
     if (adaptive && step % deck.zones.adaptive->checkEvery == 0) {
       const auto checkStart = Clock::now();
@@ -318,9 +344,15 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
       adaptiveSeconds += fencedSecondsSince(space, checkStart);
     }
     const bool last = step == totalSteps;
+    const bool historyDue = last || step % historyEvery == 0;
+    const bool fieldsDue = last || (fieldEvery > 0 && step % fieldEvery == 0);
     outputStart = Clock::now();
-    if (last || step % historyEvery == 0) output.appendHistory(solver);
-    if (last || (fieldEvery > 0 && step % fieldEvery == 0)) output.writeFields();
+    if (historyDue || fieldsDue) {
+      const auto check = solver.checkState();
+      requireHealthyState(model, solver, check, step, solver.time());
+      if (historyDue) output.appendHistory(solver, check.energy);
+      if (fieldsDue) output.writeFields();
+    }
     outputSeconds += std::chrono::duration<double>(Clock::now() - outputStart).count();
     progress.update(step, solver.time());
   }

@@ -1,10 +1,12 @@
 #include <perishell/core/fenced_seconds.hpp>
 #include <perishell/io/csv_history.hpp>
+#include <perishell/io/output_directory.hpp>
 #include <perishell/io/progress.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/solvers/history_columns.hpp>
 #include <perishell/solvers/implicit/implicit_run.hpp>
 #include <perishell/solvers/implicit/static_solver_from_model.hpp>
+#include <perishell/solvers/state_check.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -142,11 +144,27 @@ std::string incrementState(const IncrementReport& report) {
   return text.str();
 }
 
+// Stops the run on a non-finite or blown-up converged state (docs/reliability.md), naming the
+// increment, the quantity and the deck's likely cause; the files hold the increments before.
+template <class Solver>
+void requireHealthyState(const model::Model& model, const Solver& solver, int increment, int increments) {
+  const auto extent = displacementExtent(
+      model, Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.kinematics().displacements));
+  if (!extent.blownUp()) return;
+  throw RunStateError("implicit solver: increment " + std::to_string(increment) + " of " + std::to_string(increments) +
+                      " (load factor " + formatNumber(solver.loadFactor(), 6) + "): " + extent.describe() +
+                      ". Likely cause: " + implicitBlowUpCause(model.deck) +
+                      ". This state was not written; the result files hold the increments before it.");
+}
+
 template <class ExecutionSpaceT>
 ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Model& model, const RunOptions& runOptions,
                                  std::ostream& log) {
   using Clock = std::chrono::steady_clock;
   const auto& deck = model.deck;
+  const std::string directory = runOptions.outputDirectory.empty() ? deck.output.directory : runOptions.outputDirectory;
+  // Before the set-up: a directory another run holds is refused at once.
+  const io::OutputDirectoryLock outputLock(directory, log);
   const auto& settings = deck.solver.implicitSettings;
   const bool arcLength = settings.control == deck::ImplicitSettings::Control::ArcLength;
   // Under arc-length control the run ends at load factor 1; maxIncrements bounds it.
@@ -174,7 +192,6 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
     log << "implicit: stopping after " << increments << " of the deck's " << deckIncrements
         << " increments (--max-steps)\n";
 
-  const std::string directory = runOptions.outputDirectory.empty() ? deck.output.directory : runOptions.outputDirectory;
   // The run's wall time starts with the first output, so total = setup + run.
   const auto runStart = Clock::now();
   auto outputStart = runStart;
@@ -190,7 +207,19 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   ImplicitRunSummary summary;
   PhaseSeconds phases;
   int taken = 0;
+  // A long increment shows where Newton is at least every progressEverySeconds.
+  int currentIncrement = 0;
+  auto lastLine = Clock::now();
+  solver.observeIterations([&](double target, const IncrementReport& sofar) {
+    if (std::chrono::duration<double>(Clock::now() - lastLine).count() < runOptions.progressEverySeconds) return;
+    lastLine = Clock::now();
+    log << "implicit: increment " << currentIncrement << " in progress: load factor " << formatNumber(target, 6)
+        << "  Newton " << sofar.newtonIterations << "  cuts " << sofar.cuts << "  relative residual "
+        << formatNumber(sofar.relativeResidual, 3) << std::endl;
+  });
   for (int increment = 1; increment <= increments; ++increment) {
+    currentIncrement = increment;
+    lastLine = Clock::now();
     IncrementReport report;
     try {
       report = arcLength ? solver.advanceByArcLength() : solver.advanceTo(double(increment) / deckIncrements);
@@ -232,10 +261,12 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
     summary.preconditionerBuilds += report.preconditionerBuilds;
     taken = increment;
     const bool last = increment == increments || (arcLength && solver.loadFactor() >= 1.0);
+    const bool historyDue = last || increment % deck.output.historyEvery == 0;
+    const bool fieldsDue = last || (deck.output.every > 0 && increment % deck.output.every == 0);
     outputStart = Clock::now();
-    if (last || increment % deck.output.historyEvery == 0)
-      summary.maxDisplacement = output.appendHistory(increment, report);
-    if (last || (deck.output.every > 0 && increment % deck.output.every == 0)) output.writeFields();
+    if (historyDue || fieldsDue) requireHealthyState(model, solver, increment, deckIncrements);
+    if (historyDue) summary.maxDisplacement = output.appendHistory(increment, report);
+    if (fieldsDue) output.writeFields();
     outputSeconds += std::chrono::duration<double>(Clock::now() - outputStart).count();
     progress.update(last ? increments : increment, incrementState(report));
     if (last) break;

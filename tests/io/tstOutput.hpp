@@ -8,7 +8,10 @@
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/mesh/quad_mesh.hpp>
 
+#include <scratch_directory.hpp>
+
 #include <hdf5.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cctype>
@@ -33,23 +36,8 @@ namespace {
 namespace fs = std::filesystem;
 using perishell::io::NodalField;
 
-class TemporaryDirectory {
- public:
-  TemporaryDirectory() {
-    char pattern[] = "/tmp/perishell_output_XXXXXX";
-    if (!mkdtemp(pattern)) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~TemporaryDirectory() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  const std::string& path() const { return path_; }
-  std::string operator/(const std::string& name) const { return path_ + "/" + name; }
-
- private:
-  std::string path_;
-};
+// Each test's files go to a fresh /tmp directory.
+using TemporaryDirectory = perishell_test::ScratchDirectory;
 
 std::string readFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -446,6 +434,44 @@ TEST(TEST_CATEGORY, output_xdmf_rejected_or_failed_step_keeps_previous_xmf) {
   EXPECT_EQ(writer.numSteps(), 2);
   EXPECT_NE(readFile(writer.xdmfPath()), before);
   EXPECT_TRUE(fs::is_regular_file(writer.stepPath(1)));
+}
+
+TEST(TEST_CATEGORY, output_xmf_grows_by_appending_a_step_and_stays_valid_xml) {
+  // Issue 22: every step rewrote the whole .xmf (output cost growing with the run). Now a
+  // later step replaces only the closing tags: the file keeps its inode, the text before the
+  // closing tags stays byte for byte, and the file parses as XDMF with all steps after each.
+  const TemporaryDirectory directory;
+  perishell::io::XdmfTimeSeriesWriter writer(directory.path(), "plate", plate());
+  const std::string closing = "    </Grid>\n  </Domain>\n</Xdmf>\n";
+  std::string previous;
+  ino_t firstInode = 0;
+  for (int step = 0; step < 4; ++step) {
+    writer.writeStep(1.0 + step, {{"damage", 1, nodalValues(1, double(step))}});
+    const std::string text = readFile(writer.xdmfPath());
+    ASSERT_GE(text.size(), closing.size());
+    EXPECT_EQ(text.substr(text.size() - closing.size()), closing) << "step " << step;
+    const auto root = XmlReader(text).document();
+    EXPECT_EQ(root->only("Domain").only("Grid").childrenNamed("Grid").size(), std::size_t(step + 1));
+    struct stat status {};
+    ASSERT_EQ(::stat(writer.xdmfPath().c_str(), &status), 0);
+    if (step == 0) {
+      firstInode = status.st_ino;
+    } else {
+      EXPECT_EQ(status.st_ino, firstInode) << "step " << step << " replaced the .xmf instead of appending";
+      const std::string kept = previous.substr(0, previous.size() - closing.size());
+      EXPECT_EQ(text.compare(0, kept.size(), kept), 0) << "step " << step;
+      // Each appended step costs one grid: the growth is the same for every step.
+      EXPECT_EQ(text.size() - previous.size(), std::size_t(686)) << "step " << step;
+    }
+    previous = text;
+  }
+  EXPECT_EQ(countTemporaries(directory.path()), 0);
+
+  // A .xmf changed behind the writer's back (not the size it left) is rewritten whole, valid.
+  { std::ofstream(writer.xdmfPath(), std::ios::app) << "<!-- edited -->\n"; }
+  writer.writeStep(5.0, {{"damage", 1, nodalValues(1, 4.0)}});
+  const auto root = XmlReader(readFile(writer.xdmfPath())).document();
+  EXPECT_EQ(root->only("Domain").only("Grid").childrenNamed("Grid").size(), 5u);
 }
 
 TEST(TEST_CATEGORY, output_xmf_write_failure_leaves_no_xmf) {

@@ -24,4 +24,13 @@ void replaceFileAtomically(const std::string& path,
 // Text (or any bytes) through replaceFileAtomically.
 void writeFileAtomically(const std::string& path, const std::string& contents);
 
+// Replaces the existing file's bytes from `offset` to its end, `previousTail`, by `newTail`
+// in one write and fdatasyncs it: an append that keeps a file's closing text (the .xmf's
+// closing tags) at its end, at the cost of the new text rather than of the whole file. If the
+// write fails the file is cut back to `offset` and `previousTail` written again, and the
+// error propagates as std::runtime_error naming the path and the errno text. Not atomic
+// against a crash in the write itself (a torn tail), which replaceFileAtomically is.
+void replaceFileTail(const std::string& path, std::size_t offset, const std::string& previousTail,
+                     const std::string& newTail);
+
 }  // namespace perishell::io

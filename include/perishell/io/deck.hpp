@@ -6,6 +6,7 @@
 #include <perishell/mesh/crack_segment.hpp>
 
 #include <array>
+#include <cstddef>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -250,6 +251,9 @@ struct Deck {
   // The curve with this name, or nullptr.
   const deck::Curve* findCurve(const std::string& name) const;
 };
+
+// The largest deck read [bytes]; a larger one is refused before parsing (docs/deck.md).
+constexpr std::size_t maxDeckBytes = std::size_t(1) << 20;
 
 // Reads and validates a deck file; relative paths in it (mesh.file, output.directory) are
 // resolved against the file's directory. Throws DeckError.

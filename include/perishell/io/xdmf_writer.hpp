@@ -9,16 +9,20 @@
 //   <base>_NNNNNN.h5  one per step (NNNNNN = step index from 0, six digits or more):
 //                     "/time" (1 value, float64, s) and "/fields/<name>" (float64; nodes
 //                     for a scalar, nodes x 3 for a vector);
-//   <base>.xmf        a Temporal collection with one Uniform grid per step, rewritten after
-//                     every step.
-// Every file is written atomically (atomic_file.hpp), the step's .h5 before the .xmf, so
+//   <base>.xmf        a Temporal collection with one Uniform grid per step; the first step
+//                     writes it whole, each later one replaces its closing tags by the
+//                     step's grid and the closing tags (atomic_file.hpp, replaceFileTail), so
+//                     a step costs its own grid and the file is complete XML after each step.
+// The .h5 files are written atomically (atomic_file.hpp), the step's .h5 before the .xmf, so
 // the .xmf on disk only ever lists complete .h5 files. A step that fails validation
 // writes nothing; a step whose write fails leaves the previous .xmf as it was.
 // Files of an earlier run in the same directory are replaced as this run reaches them; its
-// .xmf lists only this run's steps from the first writeStep on.
+// .xmf lists only this run's steps from the first writeStep on (the run drivers clear an
+// earlier run's files first, io/output_directory.hpp).
 #include <perishell/core/types.hpp>
 #include <perishell/mesh/quad_mesh.hpp>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -72,13 +76,16 @@ class XdmfTimeSeriesWriter {
   };
 
   std::string stepFileName(int step) const;
-  std::string xdmfText(const std::vector<StepRecord>& steps) const;
+  std::string xdmfHeader() const;
+  std::string xdmfGrid(int step, const StepRecord& record) const;
+  static std::string xdmfClosing();
 
   std::string directory_;
   std::string baseName_;
   LocalIndex numNodes_;
   LocalIndex numElements_;
   std::vector<StepRecord> steps_;
+  std::uintmax_t xdmfBytes_ = 0;  // the .xmf's size as this writer left it
 };
 
 }  // namespace perishell::io

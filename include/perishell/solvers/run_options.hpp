@@ -22,6 +22,8 @@ struct RunOptions {
   // Fence between the explicit step's phases to time them (implicit phases are always
   // timed); costs a synchronisation per phase.
   bool timePhases = false;
+  // The longest a long implicit increment goes without a progress line [s].
+  double progressEverySeconds = 2.0;
 };
 
 // (phase, seconds) rows, in the order written.

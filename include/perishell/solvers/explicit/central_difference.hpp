@@ -154,6 +154,25 @@ class CentralDifferenceSolver {
     return reduceEnergies(kineticAtHalfSteps());
   }
 
+  // The monitor's test (step()) made now, between steps, on energies(): finite state and
+  // energies, and no stored energy beyond (1 + energyGrowthLimit) x the work done on the body.
+  // The run driver calls it before every write and after the last step, so that a blow-up
+  // between two monitor steps is never written out as a result.
+  struct StateCheck {
+    EnergyReport energy;
+    bool finite = true;
+    bool runaway = false;
+    bool healthy() const { return finite && !runaway; }
+  };
+  StateCheck checkState() {
+    StateCheck check;
+    check.energy = energies();
+    check.finite = !nonFinite_;
+    check.runaway = step_ > 0 && check.energy.stored() > 0.0 &&
+                    check.energy.stored() > (1.0 + options_.energyGrowthLimit) * std::abs(check.energy.input());
+    return check;
+  }
+
   // Switches to new bodies over the same mesh nodes (the adaptive PD zone,
   // coupling/adaptive_zone.hpp). Displacements, rotations, velocities and the energy
   // accumulators carry over; a bond of the new list between two nodes whose old bond was

@@ -22,6 +22,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -55,10 +56,14 @@ struct NewtonOptions {
   // of r is the round-off of the internal forces (sums of large element and bond forces that
   // cancel), which at small load levels can exceed tolerance * |P|.
   double tolerance = 1e-8;
-  int maxCuts = 8;  // bisections of one increment (in all) before giving up
+  // Bisections of one increment in all before giving up: the halvings after a failed sub-step
+  // and those after a hard one (below) together, so that a load no step converges easily under
+  // stops the run rather than creeping on in ever smaller sub-steps.
+  int maxCuts = 8;
   // Automatic sub-steps: the step that converged in at most easyIterations Newton iterations
   // is doubled for the next one, one that needed more than hardIterations is halved (before
-  // it needs a cut); the step carries over to the next increment, never beyond its size.
+  // it needs a cut, and counted as one); the step carries over to the next increment, never
+  // beyond its size.
   int easyIterations = 8;
   int hardIterations = 16;
   // Line search along du where the full step overshoots: regula falsi on s(eta) = du . r(u +
@@ -197,12 +202,24 @@ class StaticNewtonSolver {
 
   // Moves the load factor from its current value to loadFactor (>= current) in sub-steps
   // sized by the Newton iterations of the last one (NewtonOptions::easyIterations), halving a
-  // step Newton fails on. Throws NewtonFailure after maxCuts cuts within this increment.
+  // step Newton fails on or needs many iterations for. Throws NewtonFailure after maxCuts
+  // halvings in all within this increment.
   IncrementReport advanceTo(double loadFactor) {
     IncrementReport report;
     const double fullStep = loadFactor - loadFactor_;
     double step = preferredStep_ > 0.0 ? std::min(fullStep, preferredStep_) : fullStep;
     std::string lastReason;
+    auto cut = [&](const std::string& reason, double target) {
+      lastReason = reason;
+      if (++report.cuts > options_.maxCuts)
+        throw NewtonFailure("Newton did not reach load factor " + std::to_string(loadFactor) + " after " +
+                            std::to_string(options_.maxCuts) + " cuts of the increment (solver.max-cuts; last " +
+                            "sub-step towards " + std::to_string(target) + ", from " + std::to_string(loadFactor_) +
+                            "): " + lastReason);
+      step *= 0.5;
+      preferredStep_ = step;
+      notifyIteration(target, report);
+    };
     while (loadFactor_ < loadFactor) {
       const double target = loadFactor_ + step >= loadFactor - 1e-12 * fullStep ? loadFactor : loadFactor_ + step;
       ++report.attempts;
@@ -212,22 +229,18 @@ class StaticNewtonSolver {
       if (attempt.empty()) {
         loadFactor_ = target;
         const int iterations = report.newtonIterations - iterationsBefore;
+        // A hard sub-step halves the next one: a cut while the increment has load left.
+        if (iterations > options_.hardIterations && loadFactor_ < loadFactor)
+          cut("the sub-step converged only in " + std::to_string(iterations) + " Newton iterations", target);
+        else if (iterations > options_.hardIterations)
+          step *= 0.5;
         if (iterations <= options_.easyIterations) step *= 2.0;
-        if (iterations > options_.hardIterations) step *= 0.5;
         preferredStep_ = step;
         step = std::min(step, fullStep);
         continue;
       }
       restoreState();
-      lastReason = attempt;
-      ++report.cuts;
-      if (report.cuts > options_.maxCuts) {
-        throw NewtonFailure("Newton did not converge towards load factor " + std::to_string(loadFactor) +
-                            " after " + std::to_string(options_.maxCuts) + " cuts of the increment (last try: " +
-                            std::to_string(target) + "): " + lastReason);
-      }
-      step *= 0.5;
-      preferredStep_ = step;
+      cut(attempt, target);
     }
     report.loadFactor = loadFactor_;
     if (usesFactor()) factorConvergedTangent(report);
@@ -351,6 +364,10 @@ class StaticNewtonSolver {
   }
 
   double loadFactor() const { return loadFactor_; }
+  // Called after every Newton iteration and every cut with the load factor being tried and
+  // the increment's report so far: the run's progress lines during long increments.
+  using IterationObserver = std::function<void(double target, const IncrementReport& report)>;
+  void observeIterations(IterationObserver observer) { observer_ = std::move(observer); }
   const pd::PdKinematics<Memory>& kinematics() const { return state_; }
   // P - F_int at the last evaluation (the converged state after advanceTo): zero to the
   // tolerance at free DOF, minus the support reaction at prescribed DOF.
@@ -420,6 +437,7 @@ class StaticNewtonSolver {
                             "; check the supports: the model must not be free to move as a rigid body or a mechanism");
       if (!linearFailure.empty()) return linearFailure;
       ++report.newtonIterations;
+      notifyIteration(target, report);
       start = Clock::now();
       // s(0) = du . r: > 0 where du descends the energy.
       const double slope = options_.lineSearch ? freeDot() : 0.0;
@@ -919,6 +937,7 @@ class StaticNewtonSolver {
       applyCorrection(1.0);
       loadFactor_ += ds;
       ++report.newtonIterations;
+      notifyIteration(loadFactor_, report);
     }
   }
 
@@ -933,6 +952,10 @@ class StaticNewtonSolver {
   }
 
  private:
+  void notifyIteration(double target, const IncrementReport& report) const {
+    if (observer_) observer_(target, report);
+  }
+
   CurveFactors loadFactors(double s) const {
     CurveFactors factors;
     for (int p = 0; p < actions_.numPatterns(); ++p)
@@ -956,6 +979,7 @@ class StaticNewtonSolver {
   void restoreIterate() { copyKinematics(state_, iterateStart_); }
 
   ExecutionSpaceT space_;
+  IterationObserver observer_;
   LocalIndex numNodes_;
   std::optional<shell::ShellBody<Memory>> shell_;
   std::optional<pd::PdBody<Memory>> pd_;

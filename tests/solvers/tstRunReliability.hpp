@@ -1,0 +1,246 @@
+// Runs that do not lie (issue 22, docs/reliability.md): an explicit run that blows up between
+// two energy-monitor steps stops at its next write or its last step, naming the step, the
+// quantity and the deck's likely cause (never a key the deck does not set); Newton's
+// solver.max-cuts bounds the cuts of an increment in all; a run refuses an output directory
+// another run holds, and a rerun leaves none of an earlier run's step files.
+#include <perishell/io/output_directory.hpp>
+#include <perishell/model/model.hpp>
+#include <perishell/solvers/explicit/central_difference.hpp>
+#include <perishell/solvers/explicit/explicit_run.hpp>
+#include <perishell/solvers/implicit/implicit_run.hpp>
+#include <perishell/solvers/implicit/static_newton.hpp>
+#include <perishell/solvers/state_check.hpp>
+
+#include <perishell/solvers/implicit/static_solver_from_model.hpp>
+
+#include <scratch_directory.hpp>
+#include <solvers/run_files.hpp>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Each test's run writes into a fresh /tmp directory.
+using RunDirectory = perishell_test::ScratchDirectory;
+
+// The issue's plate: 20 x 6 mm steel, clamped on the left, an edge traction on the right,
+// for explicit runs ramped from 0 (so that the energy monitor's check at step 0 passes);
+// implicit runs take it in their increments.
+std::string plateDeck(const std::string& traction, const std::string& solverLine, const std::string& output,
+                      bool ramped = true) {
+  return R"(perishell:
+  version: 1
+  mesh: {generator: plate, length-x: 0.020, length-y: 0.006, spacing: 1.0e-3}
+  material: {young-modulus: 210.0e9, poisson-ratio: 0.3, density: 7850.0, thickness: 1.0e-3}
+  supports:
+    clamp: {set: left, dofs: [ux, uy, uz, rx, ry, rz]}
+  loads:
+    pull: {type: edge-traction, set: right, value: )" +
+         traction + (ramped ? R"(, curve: ramp}
+  curves:
+    ramp: {type: ramp, end-time: 1.0e-5})" : "}") + R"(
+  solver: )" + solverLine + R"(
+  output: )" + output + "\n";
+}
+
+std::string runExplicitError(const std::string& deckText, const std::string& directory) {
+  using namespace perishell_test_run_files;
+  const auto model = perishell::model::buildModel(perishell::parseDeck(deckText, "plate.yaml"));
+  std::ostringstream log;
+  try {
+    perishell::solvers::runExplicit(model, {directory, backendOf<TEST_EXECSPACE>()}, log);
+  } catch (const perishell::solvers::ExplicitInstability& error) {
+    return error.what();
+  }
+  ADD_FAILURE() << "the run ended normally:\n" << log.str();
+  return "";
+}
+
+int gridsIn(const std::string& xmfPath) {
+  std::ifstream file(xmfPath);
+  std::ostringstream text;
+  text << file.rdbuf();
+  int grids = 0;
+  for (auto at = text.str().find("<Grid Name=\"step_"); at != std::string::npos;
+       at = text.str().find("<Grid Name=\"step_", at + 1))
+    ++grids;
+  return grids;
+}
+
+}  // namespace
+
+TEST(TEST_CATEGORY, explicit_run_with_a_non_finite_state_stops_naming_step_quantity_and_load) {
+  // The issue's reproducer: 50 steps under a traction ramped to 1e300 Pa, the monitor every
+  // 100 steps, one field write at the end. It ended with exit 0, "energy balance error 0" and
+  // NaN fields.
+  const RunDirectory directory;
+  const std::string message = runExplicitError(
+      plateDeck("1.0e300", "{type: explicit, steps: 50}", "{every: 50, fields: [displacement]}"), directory.path());
+  EXPECT_NE(message.find("explicit solver: unstable at step 50 (t = "), std::string::npos) << message;
+  EXPECT_NE(message.find("the displacement is not finite at the node at ["), std::string::npos) << message;
+  EXPECT_NE(message.find("the time step was the estimated critical step "), std::string::npos) << message;
+  EXPECT_NE(message.find(" x 0.9 (the deck sets no dt); the loads are the likely cause: the largest load is "
+                         "loads.pull.value = 1e+300 Pa"),
+            std::string::npos)
+      << message;
+  EXPECT_EQ(message.find("solver.dt"), std::string::npos) << message;
+  // Only the initial state was written: the bad one never reaches the files.
+  EXPECT_EQ(gridsIn(directory.path() + "/results.xmf"), 1);
+  EXPECT_FALSE(fs::exists(directory.path() + "/results_000001.h5"));
+}
+
+TEST(TEST_CATEGORY, explicit_run_at_ten_times_the_critical_step_stops_naming_solver_dt) {
+  using namespace perishell_test_run_files;
+  const RunDirectory directory;
+  // The critical step of this plate, from a one-step run.
+  const auto probe = perishell::model::buildModel(perishell::parseDeck(
+      plateDeck("50.0e6", "{type: explicit, steps: 1}", "{every: 1}"), "plate.yaml"));
+  std::ostringstream log;
+  const double critical =
+      perishell::solvers::runExplicit(probe, {directory.path(), backendOf<TEST_EXECSPACE>()}, log).criticalTimeStep;
+  ASSERT_GT(critical, 1e-9);
+  ASSERT_LT(critical, 1e-6);
+  std::ostringstream dt;
+  dt.precision(17);
+  dt << 10.0 * critical;
+  // 60 steps, the monitor at step 0 only: |u| reached 1.55e7 m with exit 0 before.
+  const std::string message = runExplicitError(
+      plateDeck("50.0e6", "{type: explicit, steps: 60, dt: " + dt.str() + "}", "{every: 0}"), directory.path());
+  EXPECT_NE(message.find("explicit solver: unstable at step 60 (t = "), std::string::npos) << message;
+  EXPECT_NE(message.find("the energies are no longer finite; the largest displacement is |u| = "), std::string::npos)
+      << message;
+  EXPECT_NE(message.find(" (more than 1000 x the model's size)"), std::string::npos) << message;
+  EXPECT_NE(message.find("Likely cause: solver.dt = "), std::string::npos) << message;
+  EXPECT_NE(message.find(" s is 10 x the estimated critical step "), std::string::npos) << message;
+  EXPECT_NE(message.find("lower solver.dt, or leave it out"), std::string::npos) << message;
+  EXPECT_EQ(gridsIn(directory.path() + "/results.xmf"), 1);  // the initial state only
+}
+
+TEST(TEST_CATEGORY, implicit_run_with_a_blown_up_state_stops_naming_increment_quantity_and_load) {
+  using namespace perishell_test_run_files;
+  const RunDirectory directory;
+  // 1e15 Pa on the 20 mm strip: Newton converges at half the load on a state with |u| =
+  // 35.4 m, and at the full load 70.8 m, which the run wrote out with exit 0 before.
+  const auto model = perishell::model::buildModel(perishell::parseDeck(
+      plateDeck("1.0e15", "{type: implicit, increments: 2}", "{every: 1}", false), "plate.yaml"));
+  std::ostringstream log;
+  try {
+    perishell::solvers::runImplicit(model, {directory.path(), backendOf<TEST_EXECSPACE>()}, log);
+    ADD_FAILURE() << "the run ended normally:\n" << log.str();
+  } catch (const perishell::solvers::RunStateError& error) {
+    const std::string message = error.what();
+    // One of the two loaded corners (they move alike, to round-off).
+    EXPECT_EQ(message.rfind("implicit solver: increment 1 of 2 (load factor 0.5): the largest displacement is "
+                            "|u| = 35.39 m at the node at [0.02, ",
+                            0),
+              0u)
+        << message;
+    EXPECT_NE(message.find(", 0] m (more than 1000 x the model's size). Likely cause: the loads (the largest load is "
+                           "loads.pull.value = 1e+15 Pa), or supports that leave the model free to move. This state "
+                           "was not written"),
+              std::string::npos)
+        << message;
+  }
+  EXPECT_EQ(gridsIn(directory.path() + "/results.xmf"), 1);  // the initial state only
+}
+
+TEST(TEST_CATEGORY, newton_max_cuts_bounds_the_halvings_of_an_increment_in_all) {
+  using perishell::solvers::IncrementReport;
+  using perishell::solvers::NewtonOptions;
+  // Every converged sub-step counts as hard here, so each one halves the next. Those halvings
+  // were not counted as cuts: the increment crept on in ever smaller sub-steps (a series that
+  // never reaches its end) with no output and no bound.
+  const auto model = perishell::model::buildModel(perishell::parseDeck(
+      plateDeck("50.0e6", "{type: implicit, increments: 2, max-cuts: 3}", "{every: 1}", false), "plate.yaml"));
+  auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model, [](NewtonOptions& options) {
+    options.easyIterations = 0;
+    options.hardIterations = 0;
+  });
+  int iterations = 0;
+  solver.observeIterations([&iterations](double, const IncrementReport&) {
+    if (++iterations > 500) throw std::runtime_error("Newton crept on past 500 iterations");
+  });
+  // One full sub-step ends the first increment: no cut, the next sub-step halved.
+  const IncrementReport first = solver.advanceTo(0.5);
+  EXPECT_EQ(first.attempts, 1);
+  EXPECT_EQ(first.cuts, 0);
+  try {
+    solver.advanceTo(1.0);
+    ADD_FAILURE() << "the increment ended";
+  } catch (const perishell::solvers::NewtonFailure& failure) {
+    const std::string message = failure.what();
+    EXPECT_NE(message.find("Newton did not reach load factor 1.000000 after 3 cuts of the increment (solver.max-cuts; "
+                           "last sub-step towards 0.968750, from 0.968750): the sub-step converged only in "),
+              std::string::npos)
+        << message;
+  }
+  // 0.5 + 0.25 + 0.125 + 0.0625 + 0.03125: four converged sub-steps, then the fourth cut stops it.
+  EXPECT_DOUBLE_EQ(solver.loadFactor(), 0.96875);
+  EXPECT_LT(iterations, 100);
+}
+
+TEST(TEST_CATEGORY, implicit_run_prints_progress_lines_within_an_increment) {
+  using namespace perishell_test_run_files;
+  const RunDirectory directory;
+  const auto model = perishell::model::buildModel(perishell::parseDeck(
+      plateDeck("50.0e6", "{type: implicit, increments: 2}", "{every: 1}", false), "plate.yaml"));
+  perishell::solvers::RunOptions options{directory.path(), backendOf<TEST_EXECSPACE>()};
+  options.progressEverySeconds = 0.0;  // a line after every Newton iteration and cut
+  std::ostringstream log;
+  perishell::solvers::runImplicit(model, options, log);
+  const std::string text = log.str();
+  EXPECT_NE(text.find("implicit: increment 1 in progress: load factor 0.5  Newton 1  cuts 0  relative residual "),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("implicit: increment 2 in progress: load factor 1  Newton 1  cuts 0  relative residual "),
+            std::string::npos)
+      << text;
+}
+
+TEST(TEST_CATEGORY, run_refuses_a_held_output_directory_and_a_rerun_leaves_no_stale_steps) {
+  using namespace perishell_test_run_files;
+  const RunDirectory directory;
+  const auto run = [&](int steps) {
+    const auto model = perishell::model::buildModel(perishell::parseDeck(
+        plateDeck("50.0e6", "{type: explicit, steps: " + std::to_string(steps) + "}", "{every: 10}"), "plate.yaml"));
+    std::ostringstream log;
+    perishell::solvers::runExplicit(model, {directory.path(), backendOf<TEST_EXECSPACE>()}, log);
+    return log.str();
+  };
+  {
+    // Another run holds the directory: refused before anything is written, the holder named.
+    std::ostringstream holderLog;
+    const perishell::io::OutputDirectoryLock holder(directory.path(), holderLog);
+    try {
+      run(20);
+      ADD_FAILURE() << "a held directory was written";
+    } catch (const perishell::io::OutputDirectoryError& error) {
+      EXPECT_NE(std::string(error.what()).find("is in use by run " + std::to_string(getpid()) + " on "),
+                std::string::npos)
+          << error.what();
+    }
+    EXPECT_FALSE(fs::exists(directory.path() + "/results.xmf"));
+  }
+  run(50);  // steps 0, 10, .., 50: six step files
+  EXPECT_TRUE(fs::exists(directory.path() + "/results_000005.h5"));
+  const std::string log = run(20);  // three step files; the longer run's others are removed
+  EXPECT_NE(log.find("output: removed 10 file(s) of an earlier run from " + directory.path() + " ("), std::string::npos)
+      << log;
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(directory.path())) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"history.csv", "results.xmf", "results_000000.h5", "results_000001.h5",
+                                             "results_000002.h5", "results_mesh.h5", "timings.csv"}));
+  EXPECT_EQ(gridsIn(directory.path() + "/results.xmf"), 3);
+}
