@@ -46,7 +46,7 @@ struct ShellSection {
   // non-singular without stiffening the membrane: 1e-3 leaves the patch tests exact
   // (theta_z = omega there) and keeps the drilling stiffness far below the membrane's.
   double drillingFactor = 1e-3;
-  // Hourglass stiffness coefficient r of the explicit one-point element
+  // Membrane hourglass stiffness coefficient r of the explicit one-point element
   // (shell/one_point_shell.hpp; LS-DYNA's default QM is 0.1). MITC4 has no hourglass modes.
   double hourglassCoefficient = 0.1;
 };

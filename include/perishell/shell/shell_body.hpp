@@ -50,10 +50,13 @@ struct ShellBody {
 };
 
 // The faster assembly of the one-point element's forces on each backend (docs/explicit.md,
-// "The explicit shell element").
+// "The explicit shell element"): Gather on host backends (no atomics; 1.25x faster on 2
+// OpenMP threads), Scatter on a GPU (1.4x faster on the H200).
 template <class ExecutionSpaceT>
 constexpr ElementForceAssembly defaultElementForceAssembly() {
-  return ElementForceAssembly::Scatter;
+  return Kokkos::SpaceAccessibility<Kokkos::HostSpace, typename ExecutionSpaceT::memory_space>::accessible
+             ? ElementForceAssembly::Gather
+             : ElementForceAssembly::Scatter;
 }
 
 namespace detail {
