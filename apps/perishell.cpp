@@ -314,6 +314,10 @@ int main(int argc, char* argv[]) {
     std::printf("perishell %s\n", perishell::versionString().c_str());
     return 0;
   }
+  // libgomp has already read its environment: with OMP_PROC_BIND unset it binds no threads.
+  // Saying so to Kokkos keeps its "OMP_PROC_BIND not set" advice off every run; a value the
+  // user set is left alone.
+  setenv("OMP_PROC_BIND", "false", /*overwrite=*/0);
   Kokkos::ScopeGuard kokkos(argc, argv);  // strips the --kokkos-* arguments from argv
   args.assign(argv + 1, argv + argc);
   if (args.empty()) {

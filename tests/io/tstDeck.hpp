@@ -7,7 +7,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -736,24 +735,22 @@ TEST(TEST_CATEGORY, deck_without_a_final_newline_or_ending_in_a_comment_parses) 
   EXPECT_EQ(parseDeck(noNewline + "\r\n", "crlf.yaml").output.every, 1);
 }
 
-// Seconds parseDeck takes to refuse (or accept) a text, and its message ("" when accepted).
-std::pair<double, std::string> timedParse(const std::string& text) {
-  const auto start = std::chrono::steady_clock::now();
-  std::string message;
+// parseDeck's message for a text it refuses ("" when it accepts it).
+std::string refusalOf(const std::string& text) {
   try {
     parseDeck(text, "big.yaml");
   } catch (const DeckError& error) {
-    message = error.what();
+    return error.what();
   }
-  return {std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), message};
+  return "";
 }
 
-TEST(TEST_CATEGORY, deck_over_one_mib_or_of_pathological_shape_is_refused_quickly) {
+TEST(TEST_CATEGORY, deck_over_one_mib_or_of_pathological_shape_is_refused) {
   // Issue 22: a 300 k-character scalar took 28-59 s to parse, a 1e5-item list 34 s, a 4 MB
-  // scalar over 10 minutes; there was no size limit.
+  // scalar over 10 minutes; there was no size limit. These limits bound the parse time, which
+  // perf/deck_limits.cpp measures on the same shapes.
   const std::string oversized = baseDeck + "# " + std::string(maxDeckBytes, 'x') + "\n";
-  const auto [oversizedSeconds, oversizedMessage] = timedParse(oversized);
-  EXPECT_LT(oversizedSeconds, 1.0);
+  const std::string oversizedMessage = refusalOf(oversized);
   EXPECT_EQ(oversizedMessage, "big.yaml: the deck is " + std::to_string(oversized.size()) +
                                   " bytes, over the limit of 1048576 bytes (1 MiB); a deck holds settings, and a "
                                   "large mesh goes in its own file (mesh.file)");
@@ -771,15 +768,13 @@ TEST(TEST_CATEGORY, deck_over_one_mib_or_of_pathological_shape_is_refused_quickl
   fs::remove_all(scratchDirectory());
 
   const std::string longScalar = edited(baseDeck, {{"title: base", "title: " + std::string(300000, 'a')}});
-  const auto [scalarSeconds, scalarMessage] = timedParse(longScalar);
-  EXPECT_LT(scalarSeconds, 1.0);
+  const std::string scalarMessage = refusalOf(longScalar);
   EXPECT_EQ(scalarMessage, "big.yaml: line 3: the line is 300009 characters long, over the limit of "
                            "4096 characters of a deck line");
   std::string items;
   for (int k = 0; k < 100000; ++k) items += (k ? ", " : "") + std::to_string(k % 10);
   const std::string longList = edited(baseDeck, {{"title: base", "title: base\n  notes: [" + items + "]"}});
-  const auto [listSeconds, listMessage] = timedParse(longList);
-  EXPECT_LT(listSeconds, 1.0);
+  const std::string listMessage = refusalOf(longList);
   EXPECT_EQ(listMessage.rfind("big.yaml: line 4: the line is 300009 characters long", 0), 0u) << listMessage;
 
   // Flow maps 3,000 deep took 6.5 s; the same list of 100,000 items over short lines, 0.9 s.
@@ -795,7 +790,7 @@ TEST(TEST_CATEGORY, deck_over_one_mib_or_of_pathological_shape_is_refused_quickl
       << many.reason();
 
   // The costliest decks within the bounds: 19,900 entries 11 levels deep, or in flow maps 10
-  // deep; each is read (and refused by the schema for its unknown key) in well under a second.
+  // deep; each is read whole and refused by the schema for its unknown key.
   std::string block;
   for (int group = 0; group < 1800; ++group) {
     block += "  b" + std::to_string(group) + ":\n";
@@ -806,8 +801,7 @@ TEST(TEST_CATEGORY, deck_over_one_mib_or_of_pathological_shape_is_refused_quickl
   for (int level = 0; level < 10; ++level) flow = "{a: " + flow + "}";
   for (int k = 0; k < 1800; ++k) flowMaps += "  n" + std::to_string(k) + ": " + flow + "\n";
   for (const auto& within : {block, flowMaps}) {
-    const auto [seconds, message] = timedParse(edited(baseDeck, {{"  version: 1\n", "  version: 1\n" + within}}));
-    EXPECT_LT(seconds, 1.0);
+    const std::string message = refusalOf(edited(baseDeck, {{"  version: 1\n", "  version: 1\n" + within}}));
     EXPECT_NE(message.find(": unknown key; allowed keys here: version, title"), std::string::npos) << message;
   }
 }

@@ -94,4 +94,14 @@ PressurisedMembraneResult runPressurisedMembrane(const ExecutionSpaceT& space,
   return result;
 }
 
+// Compiled once per execution space (src/cases/pressurised_membrane_*.cpp): Belos is
+// instantiated there, not in every file that runs the case.
+#ifdef KOKKOS_ENABLE_OPENMP
+extern template PressurisedMembraneResult runPressurisedMembrane(const Kokkos::OpenMP&,
+                                                                 const PressurisedMembraneOptions&);
+#endif
+#ifdef KOKKOS_ENABLE_CUDA
+extern template PressurisedMembraneResult runPressurisedMembrane(const Kokkos::Cuda&, const PressurisedMembraneOptions&);
+#endif
+
 }  // namespace perishell::cases
