@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # One command from a fresh Debian 12 machine (as root) to a built perishell running its
 # default case: installs the Debian packages, builds the dependency stack into the cache
-# (cmake/deps/bootstrap.sh), configures and builds the preset, runs the default case.
+# (cmake/deps/bootstrap.sh), configures and builds the preset, runs the default case and
+# draws its crack.
 # Usage: bash cmake/quickstart.sh [openmp|cuda|debug]   (default: openmp)
 set -euo pipefail
 preset=${1:-openmp}
@@ -18,7 +19,17 @@ if [ "$backend" = cuda ] && ! command -v nvidia-smi > /dev/null; then
        "(README: 'GPU build')."
   exit 0
 fi
+# The default case: a crack runs and branches in a glass plate (apps/cases/default_crack_branching.yaml),
+# written for ParaView and drawn to PNG (damage, displacement) by perf/charts/render_results.py.
+out=output/default-case
 echo
-echo "quickstart: running the default case: build/$preset/apps/perishell membrane"
-OMP_NUM_THREADS=${OMP_NUM_THREADS:-$(nproc)} OMP_PROC_BIND=${OMP_PROC_BIND:-false} \
-  "build/$preset/apps/perishell" membrane
+echo "quickstart: running the default case: build/$preset/apps/perishell run apps/cases/default_crack_branching.yaml"
+OMP_NUM_THREADS=${OMP_NUM_THREADS:-$(nproc)} \
+  "build/$preset/apps/perishell" run apps/cases/default_crack_branching.yaml --output "$out"
+for field in damage displacement; do
+  /usr/bin/python3 perf/charts/render_results.py damage "$out/results.xmf" --field "$field" --out "$out/crack" > /dev/null
+done
+echo
+echo "quickstart: done. The crack, drawn at three times: $out/crack_damage_panel.png and"
+echo "  $out/crack_displacement_panel.png; in ParaView: $out/results.xmf; history: $out/history.csv."
+echo "  The stack-verification case: build/$preset/apps/perishell membrane"

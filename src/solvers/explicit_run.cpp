@@ -103,6 +103,8 @@ class RunOutput {
   // The nodes of PD elements, for the zone field (the adaptive zone grows them).
   void setZoneNodes(const Kokkos::View<LocalIndex*, Kokkos::HostSpace>& nodes) { zoneNodes_ = nodes; }
   std::string historyPath() const { return history_->path(); }
+  // The crack tip of the last history row, when the history tracks it (deck: history: crack-tip).
+  std::optional<CrackTip> crackTip() const { return crackTip_; }
 
   void writeFields() {
     const auto& deck = model_.deck;
@@ -211,6 +213,7 @@ class RunOutput {
         for (int d = 0; d < 3; ++d) tip[d] = x(node, d);
       }
     }
+    crackTip_ = CrackTip{{tip[0], tip[1], tip[2]}, farthest};
     // No speed across the row where the crack first shows (its distance jumps from nothing).
     const double speed = time > lastTipTime_ && lastTipDistance_ > 0.0 ? (farthest - lastTipDistance_) / (time - lastTipTime_) : 0.0;
     lastTipTime_ = time;
@@ -229,6 +232,7 @@ class RunOutput {
   std::vector<std::string> curves_;
   std::array<double, 3> crackOrigin_{0.0, 0.0, 0.0};
   double lastTipTime_ = -1.0, lastTipDistance_ = 0.0;
+  std::optional<CrackTip> crackTip_;
 };
 
 // Stops the run on a non-finite, runaway or blown-up state (docs/reliability.md), naming the
@@ -366,6 +370,7 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   summary.brokenBonds = solver.brokenBonds();
   summary.xdmfPath = output.xdmfPath();
   summary.historyPath = output.historyPath();
+  summary.crackTip = output.crackTip();
   // The steps' share: the run less output and zone growth; split by phase when timed.
   const auto& phase = solver.phaseSeconds();
   const double stepSeconds = summary.wallSeconds - outputSeconds - adaptiveSeconds;
@@ -398,8 +403,16 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   table.add("  output", formatSeconds(outputSeconds))
       .add("setup", formatSeconds(setupSeconds))
       .add("broken bonds", std::to_string(summary.brokenBonds) + " of " + std::to_string(solver.body().bonds.numBonds()))
-      .add("energy balance error", balance.str())
-      .add("fields", summary.xdmfPath)
+      .add("energy balance error", balance.str());
+  if (summary.crackTip) {
+    std::ostringstream tip;
+    tip.precision(4);
+    const auto& at = summary.crackTip->position;
+    tip << summary.crackTip->length << " m from the first pre-crack's start, tip at (" << at[0] << ", " << at[1]
+        << ", " << at[2] << ") m";
+    table.add("crack length", tip.str());
+  }
+  table.add("fields", summary.xdmfPath)
       .add("history", summary.historyPath)
       .add("timings", summary.timingsPath);
   if (adaptive)

@@ -7,10 +7,18 @@
 #include <perishell/model/model.hpp>
 #include <perishell/solvers/run_options.hpp>
 
+#include <array>
 #include <iosfwd>
+#include <optional>
 #include <string>
 
 namespace perishell::solvers {
+
+// The damaged node (damage >= 0.4) farthest from the first pre-crack's start (or the origin).
+struct CrackTip {
+  std::array<double, 3> position{};  // [m]
+  double length = 0.0;               // its distance from that start [m]
+};
 
 struct ExplicitRunSummary {
   long long steps = 0;
@@ -20,6 +28,7 @@ struct ExplicitRunSummary {
   long long brokenBonds = 0;
   PhaseTimes phases;  // as written to timingsPath
   std::string xdmfPath, historyPath, timingsPath;
+  std::optional<CrackTip> crackTip;  // at the last history row, when the history tracks it
 };
 
 // Throws std::invalid_argument (naming the deck key) for models the explicit solver cannot
