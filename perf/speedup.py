@@ -10,9 +10,13 @@ to timings.csv, and writes:
   OUT/speedup.md    per case: time per step (or per linear solve) on each backend and their
                     ratio, the full run's time (measured, or extrapolated from the steps
                     run), and the paper's GPU and CPU times for the same case and grid;
+                    ours against the paper's only per step (per linear solve), where the
+                    paper's step count is known (PAPER_STEPS), else "not comparable";
                     per case a phase table in the style of the paper's Table 3
-  OUT/speedup.png   speedup against the paper's DOF count, ours beside the paper's (if
-                    matplotlib is there)
+  OUT/speedup.png   against the paper's DOF count (if matplotlib is there): CPU time / GPU
+                    time, ours (per step) beside the paper's (its CPU and GPU run of one
+                    case and grid); and GPU time per step (per linear solve), ours beside
+                    the paper's where its step count is known
 
 Explicit cases run --cpu-steps steps on the CPU and --gpu-steps on the GPU (0: the whole
 deck); implicit ones one increment on both. Time per step is the `steps` phase over the
@@ -79,6 +83,50 @@ CASES = {
         "grids": [(0.5e-3, None, None, None, True)],
     },
 }
+
+
+# The paper's step count per timed run, where it is stated or can be inferred; its times are
+# compared with ours only per step (explicit) or per linear solve (implicit), never run
+# against run, because our decks' run lengths are our own (the prism's and the cylinder's
+# 1 ms) and the paper does not state most of its own. Paper text: ../shared/paper (line
+# numbers of its text version).
+#   pressed: Table 4 "only provides statistics for the time of solving linear equations once"
+#            (l. 730): its times are per linear solve already (0.5 mm: Table 3's "one iteration
+#            step", linear solve 1228.65 / 163.82 s, l. 708-712), compared with ours per
+#            linear solve (preconditioner + PCG per Newton iteration).
+#   steel:   "Δx = 1.75 mm ... 13,456 elements ... the time step is set to 0.1 µs ... After
+#            50,000 incremental steps, the load is gradually increased to 1800 N" (l. 749);
+#            Table 5's 1.75 mm row is that model (322,944 = 13,456 x 24 DOF, l. 774). For its
+#            finer grids (l. 759, 775-776) neither the steps nor the time step is stated.
+#   prism, cylinder: no time step, duration or step count (l. 782-784, 788, 803).
+#   glass:   no timing at all (l. 686-696).
+PAPER_STEPS = {"steel": {1.75e-3: 50000}}
+PAPER_STEPS_NOTE = {
+    "pressed": "Ours vs paper: per linear solve; the paper's Table 4 times one linear solve (\"only provides "
+               "statistics for the time of solving linear equations once\", its Section 4.2.1), ours are "
+               "preconditioner + PCG per Newton iteration of the first increment.",
+    "steel": "Ours vs paper: per step. The paper states 50,000 steps of 0.1 µs for its 1.75 mm model (\"After "
+             "50,000 incremental steps, the load is gradually increased to 1800 N\", Section 4.2.2), the "
+             "model of Table 5's first row (13,456 elements × 24 = 322,944 DOF): its times over 50,000. For "
+             "the finer grids it states neither steps nor time step: not comparable (our deck keeps 50,000 "
+             "steps of 0.1 µs on every grid, the paper may not have).",
+    "prism": "Not comparable with the paper: it states no time step, duration or step count for this example "
+             "(Section 4.2.3), and our run length (1 ms) is ours.",
+    "cylinder": "Not comparable with the paper: it states no time step, duration or step count for this "
+                "example (Section 4.2.4), and our run length (1 ms) is ours.",
+}
+NOT_COMPARABLE = "not comparable"
+
+
+def paper_per_unit(case, spacing, paper_seconds):
+    """The paper's seconds per step (explicit) or per linear solve (implicit: Table 4 is one
+    solve); None where its step count is unknown or it has no time."""
+    if paper_seconds is None:
+        return None
+    if CASES[case]["kind"] == "implicit":
+        return paper_seconds
+    steps = PAPER_STEPS.get(case, {}).get(spacing)
+    return paper_seconds / steps if steps else None
 
 
 class SpeedupError(Exception):
@@ -214,6 +262,17 @@ def ratio_text(numerator, denominator):
     return f"{numerator / denominator:.1f}×"
 
 
+def paper_ratio_text(paper_seconds, paper_unit, ours):
+    """The paper's time per step (per linear solve) over ours: '–' where either has no time,
+    'not comparable' where the paper has a time but not its step count."""
+    if paper_seconds is None or ours is None or ours <= 0:
+        return "–"
+    if paper_unit is None:
+        return NOT_COMPARABLE
+    value = paper_unit / ours
+    return f"{value:,.0f}×" if value >= 100 else f"{value:.1f}×"
+
+
 def phase_rows(kind, cpu, gpu):
     if kind == "implicit":
         names = [("setup (neighbour search, bonds, pattern)", "setup"), ("assembly", "assembly"),
@@ -293,17 +352,21 @@ def write_outputs(out, results, options, runs):
         "count for its grid, ours by the same rule (elements × 24), and our free DOF. Per step: the explicit steps' "
         "time over the steps run; implicit: preconditioner + PCG per Newton iteration of the first increment "
         "(the paper's \"one linear solve\"). Full run: the deck's whole run, extrapolated from the steps run where "
-        "marked. Phase tables: the paper's Table 3 columns; explicit step phases per step, from one more run with "
-        "`--phase-times` (a synchronisation per phase).", ""]
+        "marked. Ours vs paper: the paper's time per step (per linear solve) over ours, only where the paper's "
+        "step count is known (each table's note says how); where it is not, \"not comparable\": our decks' run "
+        "lengths are our own, so full runs are not compared. Phase tables: the paper's Table 3 columns; explicit "
+        "step phases per step, from one more run with `--phase-times` (a synchronisation per phase).", ""]
     for case in measured_cases(results):
         spec = CASES[case]
         kind = spec["kind"]
         unit = "per linear solve" if kind == "implicit" else "per step"
+        paper_what = "paper CPU per linear solve [s] | paper GPU per linear solve [s] | paper ratio" \
+            if kind == "implicit" else "paper CPU [s] | paper GPU [s] | paper ratio | paper steps"
         lines += [f"## {spec['title']}", "",
                   f"| Δx [mm] | paper DOF | our elements × 24 | free DOF | CPU {unit} [s] | GPU {unit} [s] | ratio | "
-                  "CPU full run [s] | GPU full run [s] | ratio | paper CPU [s] | paper GPU [s] | paper ratio | "
-                  "ours vs paper GPU |",
-                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+                  f"CPU full run [s] | GPU full run [s] | ratio | {paper_what} | ours vs paper CPU, {unit} | "
+                  f"ours vs paper GPU, {unit} |",
+                  "|---" * (15 if kind == "implicit" else 16) + "|"]
         paper = {grid[0]: grid[1:4] for grid in spec["grids"]}
         spacings = sorted((key[1] for key in results if key[0] == case), reverse=True)
         for spacing in spacings:
@@ -315,15 +378,23 @@ def write_outputs(out, results, options, runs):
             gpu_step = per_step(kind, *gpu) if gpu else None
             cpu_full, cpu_extra = full_run(kind, *cpu) if cpu else (None, False)
             gpu_full, gpu_extra = full_run(kind, *gpu) if gpu else (None, False)
-            # Table 4 times one linear solve: compare with ours per solve, not a full run.
-            ours_for_paper = gpu_step if kind == "implicit" else gpu_full
+            # Ours against the paper's only per step (per linear solve: Table 4 times one
+            # solve), never full run against full run: the run lengths differ or are unknown.
+            steps_cell = ""
+            if kind == "explicit":
+                paper_steps = PAPER_STEPS.get(case, {}).get(spacing)
+                steps_cell = " | " + (f"{paper_steps:,}" if paper_steps else "not stated" if paper_gpu else "–")
             lines.append(
                 f"| {spacing * 1e3:g} | {paper_dof and f'{paper_dof:,}' or '–'} | {24 * facts['elements']:,} | "
                 f"{facts['free_dof']:,} | "
                 f"{seconds_text(cpu_step)} | {seconds_text(gpu_step)} | {ratio_text(cpu_step, gpu_step)} | "
                 f"{seconds_text(cpu_full, cpu_extra)} | {seconds_text(gpu_full, gpu_extra)} | "
                 f"{ratio_text(cpu_full, gpu_full)} | {seconds_text(paper_cpu)} | {seconds_text(paper_gpu)} | "
-                f"{ratio_text(paper_cpu, paper_gpu)} | {ratio_text(paper_gpu, ours_for_paper)} |")
+                f"{ratio_text(paper_cpu, paper_gpu)}{steps_cell} | "
+                f"{paper_ratio_text(paper_cpu, paper_per_unit(case, spacing, paper_cpu), cpu_step)} | "
+                f"{paper_ratio_text(paper_gpu, paper_per_unit(case, spacing, paper_gpu), gpu_step)} |")
+        if case in PAPER_STEPS_NOTE:
+            lines += ["", PAPER_STEPS_NOTE[case]]
         both = [spacing for spacing in spacings if results[(case, spacing)].get("host")
                 and results[(case, spacing)].get("device")]
         if both:
@@ -351,6 +422,10 @@ def write_outputs(out, results, options, runs):
 
 
 def write_chart(out, results, options):
+    """Two panels against DOF (the paper's count where it has the grid, else ours by its rule):
+    CPU time / GPU time, ours per step (per linear solve) and the paper's of one run; and GPU
+    time per step (per linear solve), the paper's only where its step count is known. No
+    panel divides one run length by another."""
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -358,29 +433,52 @@ def write_chart(out, results, options):
     except ImportError:
         print("speedup: matplotlib is missing; no chart", file=sys.stderr)
         return None
-    figure, axes = plt.subplots(figsize=(7, 4.5))
+    figure, (left, right) = plt.subplots(1, 2, figsize=(12, 6))
     for index, case in enumerate(measured_cases(results)):
         spec = CASES[case]
-        ours, paper = [], []
+        kind = spec["kind"]
+        paper_grids = {grid[0]: grid[1:4] for grid in spec["grids"]}
+        ours_speedup, paper_speedup, ours_gpu, paper_gpu_unit = [], [], [], []
         for spacing, paper_dof, paper_gpu, paper_cpu, _ in spec["grids"]:
-            if not paper_dof:
+            if paper_dof and paper_gpu and paper_cpu:
+                paper_speedup.append((paper_dof, paper_cpu / paper_gpu))
+            unit = paper_per_unit(case, spacing, paper_gpu)
+            if paper_dof and unit:
+                paper_gpu_unit.append((paper_dof, unit))
+        for (measured_case, spacing), entry in sorted(results.items(), key=lambda item: item[0][1], reverse=True):
+            if measured_case != case:
                 continue
-            paper.append((paper_dof, paper_cpu / paper_gpu))
-            entry = results.get((case, spacing))
-            if entry and entry.get("host") and entry.get("device"):
-                ours.append((paper_dof, per_step(spec["kind"], *entry["host"]) /
-                             per_step(spec["kind"], *entry["device"])))
+            facts = (entry.get("device") or entry.get("host"))[1]
+            dof = paper_grids.get(spacing, (None,))[0] or 24 * facts["elements"]
+            if entry.get("device"):
+                ours_gpu.append((dof, per_step(kind, *entry["device"])))
+                if entry.get("host"):
+                    ours_speedup.append((dof, per_step(kind, *entry["host"]) / per_step(kind, *entry["device"])))
         colour = f"C{index}"
-        if ours:
-            axes.plot(*zip(*ours), "o-", color=colour, label=f"{case}: perishell (CPU {options.cpu_threads} thr. / GPU)")
-        if paper:
-            axes.plot(*zip(*paper), "s--", color=colour, alpha=0.6, label=f"{case}: paper (its CPU / its GPU)")
-    axes.set_xscale("log")
-    axes.set_yscale("log")
-    axes.set_xlabel("DOF (the paper's count, elements × 24)")
-    axes.set_ylabel("speedup, CPU time / GPU time")
-    axes.grid(True, which="both", alpha=0.3)
-    axes.legend(fontsize=7)
+        unit_name = "per linear solve" if kind == "implicit" else "per step"
+        if ours_speedup:
+            left.plot(*zip(*ours_speedup), "o-", color=colour,
+                      label=f"{case}: perishell {unit_name} (CPU {options.cpu_threads} thr. / GPU)")
+        if paper_speedup:
+            left.plot(*zip(*paper_speedup), "s--", color=colour, alpha=0.6,
+                      label=f"{case}: paper, {'one linear solve' if kind == 'implicit' else 'one run'} "
+                            "(its CPU / its GPU)")
+        if ours_gpu:
+            right.plot(*zip(*ours_gpu), "o-", color=colour, label=f"{case}: perishell GPU, {unit_name}")
+        if paper_gpu_unit:
+            right.plot(*zip(*paper_gpu_unit), "s--", color=colour, alpha=0.6,
+                       label=f"{case}: paper GPU, {unit_name}")
+    left.set_ylabel("speedup, CPU time / GPU time (same work)")
+    left.set_title("CPU / GPU, each of one run length", fontsize=9)
+    right.set_ylabel("GPU time per step or per linear solve [s]")
+    right.set_title("GPU time per step (per linear solve); the paper's\nonly where its step count is known",
+                    fontsize=9)
+    for axes in (left, right):
+        axes.set_xscale("log")
+        axes.set_yscale("log")
+        axes.set_xlabel("DOF (the paper's count, elements × 24)")
+        axes.grid(True, which="both", alpha=0.3)
+        axes.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
     figure.tight_layout()
     path = os.path.join(out, "speedup.png")
     figure.savefig(path + ".tmp.png", dpi=150)
