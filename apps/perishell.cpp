@@ -47,11 +47,12 @@ Commands:
                   reason when the deck is invalid. With --output DIR, also writes
                   DIR/model.xmf (+ .h5) for ParaView: the mesh with the node fields
                   pd-node (1 on PD nodes) and bonds (bonds per node).
-  membrane        The stack-verification case (the default case until the shell solvers
-                  land): a square membrane with fixed edges under uniform tension and
-                  pressure, assembled and solved on the build's default device (atomic
-                  element assembly, Kokkos Kernels CRS matrix, Belos PCG). Compares the
-                  centre deflection with the exact series solution.
+  membrane        The stack-verification self-test: a square membrane with fixed edges
+                  under uniform tension and pressure, assembled and solved on the build's
+                  default device (atomic element assembly, Kokkos Kernels CRS matrix, Belos
+                  PCG). Compares the centre deflection with the exact series solution.
+                  (The quick start's default case is a deck: perishell run
+                  apps/cases/default_crack_branching.yaml.)
       --cells N       quads per side, even (default 64)
       --side A        side length a [m] (default 1)
       --tension T     membrane tension T [N/m] (default 1000)
