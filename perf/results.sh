@@ -71,7 +71,7 @@ for part in "${parts[@]}"; do
     examples)
       app=$(find_binary apps/perishell)
       stamp "$out/examples"
-      for deck in glass_plate_4_1_2 steel_plate_4_2_2 hexagonal_prism_4_2_3 cracked_cylinder_4_2_4; do
+      for deck in glass_plate_4_1_2 steel_plate_4_2_2 steel_plate_4_2_2_running hexagonal_prism_4_2_3 cracked_cylinder_4_2_4; do
         OMP_NUM_THREADS=2 "$app" run "$root/apps/cases/$deck.yaml" --output "$out/examples/$deck" \
           > "$out/examples/$deck.log" 2>&1 || { tail -20 "$out/examples/$deck.log"; exit 1; }
         grep -A20 "run summary" "$out/examples/$deck.log"
@@ -86,7 +86,11 @@ for part in "${parts[@]}"; do
       "$python" "$root/perf/charts/render_results.py" history "$out/examples/steel_plate_4_2_2/history.csv" \
         --x load-factor-ramp --x-scale 1800 --y-expr "lift-left-flank-uz - push-right-flank-uz" --y-scale 1e3 \
         --xlabel "load F [N]" --ylabel "crack opening [mm]" --labels "opening (left flank uz - right flank uz)" \
-        --out "$out/examples/steel_plate_4_2_2/load_opening.png" ;;
+        --out "$out/examples/steel_plate_4_2_2/load_opening.png"
+      "$python" "$root/perf/charts/render_results.py" history "$out/examples/steel_plate_4_2_2_running/history.csv" \
+        --x load-factor-ramp --x-scale 2200 --y-expr "lift-left-flank-uz - push-right-flank-uz" --y-scale 1e3 \
+        --xlabel "load F [N]" --ylabel "crack opening [mm]" --labels "opening (left flank uz - right flank uz)" \
+        --out "$out/examples/steel_plate_4_2_2_running/load_opening.png" ;;
     report)
       "$python" "$root/perf/results_report.py" "$out" --docs "$root/docs" ;;
     *)
