@@ -1,9 +1,11 @@
 // Gmsh MSH 4.1 import: the hand-written tests/data/plate_4x2.msh equals the generated
 // 0.4 m x 0.2 m plate (nodes, quads, orientation, area, sets); orientation repair; files
-// in the style of Mesh.SaveAll = 0; and one "file:line: reason" message per reader error.
+// in the style of Mesh.SaveAll = 0; one "file:line: reason" message per reader error; and the
+// quad shape checks (coincident corners, zero area, bow-tie, re-entrant corner).
 #include <perishell/mesh/generators.hpp>
 #include <perishell/mesh/gmsh_reader.hpp>
 #include <perishell/mesh/node_geometry.hpp>
+#include <perishell/mesh/quad_shape.hpp>
 
 #include <algorithm>
 #include <array>
@@ -311,6 +313,64 @@ TEST(TEST_CATEGORY, gmsh_reader_errors_name_file_line_and_reason) {
             "mem.msh:79: quad element 11 repeats node tag 14");
   EXPECT_EQ(readerError(moebiusText()),
             "mem.msh:29: quads 4 and 3 cannot be oriented consistently: the surface is not orientable");
+}
+
+// Each defect on its own, in both orientations; a valid quad passes in both orientations and
+// when warped out of its plane.
+TEST(TEST_CATEGORY, quad_shape_check_names_each_defect_in_either_orientation) {
+  using perishell::mesh::checkQuadShape;
+  using perishell::mesh::QuadShapeDefect;
+  using Quad = std::array<std::array<double, 3>, 4>;
+  const auto reversed = [](Quad quad) {
+    std::swap(quad[1], quad[3]);
+    return quad;
+  };
+  const auto defectOf = [&](const Quad& quad) { return checkQuadShape(quad).defect; };
+  const Quad square = {{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}};
+  const Quad warped = {{{0, 0, 0}, {1, 0, 0.05}, {1, 1, 0}, {0, 1, 0.05}}};
+  const Quad skewed = {{{0, 0, 0}, {2e-3, 0, 0}, {3e-3, 1e-3, 0}, {1e-3, 1e-3, 0}}};
+  for (const Quad& valid : {square, warped, skewed}) {
+    EXPECT_EQ(defectOf(valid), QuadShapeDefect::none);
+    EXPECT_EQ(defectOf(reversed(valid)), QuadShapeDefect::none);
+  }
+  const Quad coincident = {{{0, 0, 0}, {1, 0, 0}, {1, 0, 0}, {0, 1, 0}}};
+  const auto check = checkQuadShape(coincident);
+  EXPECT_EQ(check.defect, QuadShapeDefect::coincidentCorners);
+  EXPECT_EQ(check.corner, 1);
+  EXPECT_EQ(check.otherCorner, 2);
+  const Quad collinear = {{{0, 0, 0}, {1, 0, 0}, {0.7, 0, 0}, {0.5, 0, 0}}};
+  EXPECT_EQ(defectOf(collinear), QuadShapeDefect::zeroArea);
+  // A symmetric bow-tie (no net area) and a lopsided one (the lobes' areas differ).
+  const Quad figureEight = {{{0, 0, 0}, {1, 1, 0}, {1, 0, 0}, {0, 1, 0}}};
+  const Quad lopsided = {{{0, 0, 0}, {2, 0, 0}, {0, 1, 0}, {1, 1, 0}}};
+  for (const Quad& crossing : {figureEight, lopsided}) {
+    EXPECT_EQ(defectOf(crossing), QuadShapeDefect::selfCrossing);
+    EXPECT_EQ(defectOf(reversed(crossing)), QuadShapeDefect::selfCrossing);
+  }
+  const Quad dart = {{{0, 0, 0}, {1, 0, 0}, {0.3, 0.3, 0}, {0, 1, 0}}};
+  EXPECT_EQ(checkQuadShape(dart).defect, QuadShapeDefect::reentrantCorner);
+  EXPECT_EQ(checkQuadShape(dart).corner, 2);
+  EXPECT_EQ(checkQuadShape(reversed(dart)).corner, 2);
+  const Quad straightCorner = {{{0, 0, 0}, {1, 0, 0}, {0.5, 0.5, 0}, {0, 1, 0}}};
+  EXPECT_EQ(checkQuadShape(straightCorner).defect, QuadShapeDefect::reentrantCorner);
+  EXPECT_EQ(checkQuadShape(straightCorner).corner, 2);
+}
+
+// The reader refuses a quad it cannot build an element on, by tags and line, before anything
+// is built (element 5 of plate_4x2.msh, file line 73, is the first quad of node 13).
+TEST(TEST_CATEGORY, gmsh_reader_refuses_misshapen_quads_by_tags_and_line) {
+  const std::string plate = plateText();
+  EXPECT_EQ(readerError(replaced(plate, "\n5 1 5 13 12\n", "\n5 1 13 5 12\n")),
+            "mem.msh:73: quad element 5 (node tags 1 13 5 12) crosses itself (a bow-tie): its nodes are not "
+            "listed in order around its outline");
+  EXPECT_EQ(readerError(replaced(plate, "\n0.1 0.1 0\n", "\n0.03 0.03 0\n")),
+            "mem.msh:73: quad element 5 (node tags 1 5 13 12) is not convex: its corner at node 13 points "
+            "inward or is straight, where the element map folds");
+  EXPECT_EQ(readerError(replaced(plate, "\n0.1 0.1 0\n", "\n0.1 0 0\n")),
+            "mem.msh:73: quad element 5 (node tags 1 5 13 12): nodes 5 and 13 are at the same point; a quad "
+            "needs four distinct corners");
+  EXPECT_EQ(readerError(replaced(replaced(plate, "\n0 0.1 0\n", "\n0.05 0 0\n"), "\n0.1 0.1 0\n", "\n0.07 0 0\n")),
+            "mem.msh:73: quad element 5 (node tags 1 5 13 12) has zero area: its nodes lie on one line");
 }
 
 }  // namespace gmsh_reader_test
