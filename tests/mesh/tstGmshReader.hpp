@@ -271,13 +271,29 @@ TEST(TEST_CATEGORY, gmsh_written_cylinder_joins_its_patches) {
 
 // A 4-quad Moebius band: rails a0..a3 (tags 1-4) and b0..b3 (tags 5-8); the last quad
 // joins a3-b3 to b0-a0 with a half twist.
+// A Moebius strip of 6 quads (radius 1, width 0.4, a half twist): each quad is a valid shape,
+// the surface is not orientable.
 std::string moebiusText() {
+  const double pi = 3.14159265358979323846;
   std::ostringstream text;
-  text << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 8 1 8\n2 1 0 8\n";
-  for (int tag = 1; tag <= 8; ++tag) text << tag << "\n";
-  for (int i = 0; i < 8; ++i) text << (i % 4) << " " << (i / 4) << " 0\n";
-  text << "$EndNodes\n$Elements\n1 4 1 4\n2 1 3 4\n"
-       << "1 1 2 6 5\n2 2 3 7 6\n3 3 4 8 7\n4 4 5 1 8\n$EndElements\n";
+  text.precision(17);
+  text << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 12 1 12\n2 1 0 12\n";
+  for (int tag = 1; tag <= 12; ++tag) text << tag << "\n";
+  for (int column = 0; column < 6; ++column) {
+    const double angle = 2.0 * pi * column / 6.0;
+    const double across[3] = {std::cos(angle / 2) * std::cos(angle), std::cos(angle / 2) * std::sin(angle),
+                              std::sin(angle / 2)};
+    for (const double side : {-0.2, 0.2})
+      text << std::cos(angle) + side * across[0] << " " << std::sin(angle) + side * across[1] << " "
+           << side * across[2] << "\n";
+  }
+  // Column c has the node tags 2c + 1 (inner side) and 2c + 2; past the last column the
+  // half twist joins the inner side to column 0's outer one.
+  text << "$EndNodes\n$Elements\n1 6 1 6\n2 1 3 6\n";
+  for (int column = 0; column < 5; ++column)
+    text << column + 1 << " " << 2 * column + 1 << " " << 2 * column + 3 << " " << 2 * column + 4 << " "
+         << 2 * column + 2 << "\n";
+  text << "6 11 2 1 12\n$EndElements\n";
   return text.str();
 }
 
@@ -312,7 +328,7 @@ TEST(TEST_CATEGORY, gmsh_reader_errors_name_file_line_and_reason) {
   EXPECT_EQ(readerError(replaced(plate, "14 15 9 10", "14 15 9 14")),
             "mem.msh:79: quad element 11 repeats node tag 14");
   EXPECT_EQ(readerError(moebiusText()),
-            "mem.msh:29: quads 4 and 3 cannot be oriented consistently: the surface is not orientable");
+            "mem.msh:38: quads 5 and 4 cannot be oriented consistently: the surface is not orientable");
 }
 
 // Each defect on its own, in both orientations; a valid quad passes in both orientations and

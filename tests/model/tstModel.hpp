@@ -156,7 +156,7 @@ TEST(TEST_CATEGORY, model_material_values_whose_products_overflow_or_underflow_a
   };
   const std::string thin = withMaterial("thickness: 1.0e-3", "thickness: 1.0e-200");
   EXPECT_EQ(thin.rfind("material.young-modulus and material.thickness: these values make the membrane stiffness E t = "
-                       "7.2e-189 N/m, outside what the solvers can carry in double precision (1e-100 to 1e+100 in SI "
+                       "7.2e-190 N/m, outside what the solvers can carry in double precision (1e-100 to 1e+100 in SI "
                        "units)",
                        0),
             0u)
