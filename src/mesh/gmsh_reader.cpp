@@ -1,4 +1,5 @@
 #include <perishell/mesh/gmsh_reader.hpp>
+#include <perishell/mesh/quad_shape.hpp>
 
 #include <algorithm>
 #include <array>
@@ -419,6 +420,33 @@ const std::vector<int>& physicalsOf(const GmshFile& file, int dimension, int ent
   return found == file.entityPhysicals[dimension].end() ? none : found->second;
 }
 
+// A quad the elements and node weights cannot be built on, named by its tags and line.
+void checkQuadShapeAt(const GmshFile& file, const RawElement& quad, const Scanner& scanner) {
+  std::array<std::array<double, 3>, 4> corners;
+  for (int a = 0; a < 4; ++a) corners[a] = file.nodeCoordinates[file.nodeOfTag.at(quad.nodeTags[a])];
+  const QuadShapeCheck shape = checkQuadShape(corners);
+  if (shape.defect == QuadShapeDefect::none) return;
+  std::string name = "quad element " + std::to_string(quad.tag) + " (node tags";
+  for (int a = 0; a < 4; ++a) name += " " + std::to_string(quad.nodeTags[a]);
+  name += ")";
+  const auto tag = [&quad](int corner) { return std::to_string(quad.nodeTags[corner]); };
+  switch (shape.defect) {
+    case QuadShapeDefect::coincidentCorners:
+      scanner.fail(quad.line, name + ": nodes " + tag(shape.corner) + " and " + tag(shape.otherCorner) +
+                                  " are at the same point; a quad needs four distinct corners");
+    case QuadShapeDefect::zeroArea:
+      scanner.fail(quad.line, name + " has zero area: its nodes lie on one line");
+    case QuadShapeDefect::selfCrossing:
+      scanner.fail(quad.line, name + " crosses itself (a bow-tie): its nodes are not listed in order "
+                                     "around its outline");
+    case QuadShapeDefect::reentrantCorner:
+      scanner.fail(quad.line, name + " is not convex: its corner at node " + tag(shape.corner) +
+                                  " points inward or is straight, where the element map folds");
+    case QuadShapeDefect::none:
+      break;
+  }
+}
+
 ShellMesh buildShellMesh(const GmshFile& file, const Scanner& scanner) {
   const auto& rawQuads = file.elements[2];
   if (rawQuads.empty()) scanner.fail(scanner.lastTokenLine(), "the file holds no quads (element type 3)");
@@ -447,6 +475,7 @@ ShellMesh buildShellMesh(const GmshFile& file, const Scanner& scanner) {
         if (quads[q][a] == quads[q][b])
           scanner.fail(rawQuads[q].line, "quad element " + std::to_string(rawQuads[q].tag) +
                                              " repeats node tag " + std::to_string(rawQuads[q].nodeTags[a]));
+    checkQuadShapeAt(file, rawQuads[q], scanner);
   }
   const auto uses = sortedEdgeUses(quads);
   orientConsistently(quads, uses, rawQuads, scanner);

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <numeric>
 #include <set>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -212,6 +213,80 @@ void checkPreCracksInPd(const Model& model) {
   }
 }
 
+// Extreme but finite material values make the stiffnesses, masses or bond moduli built from
+// them overflow or underflow, and the solvers then report symptoms (a non-finite critical step,
+// every DOF prescribed, zero displacement) instead of the cause. Each derived scale must lie
+// where its square and its inverse are still ordinary doubles.
+void checkMaterialScales(const Model& model) {
+  const deck::Material& material = model.deck.material;
+  const double E = material.youngModulus, nu = material.poissonRatio, rho = material.density, t = material.thickness;
+  const double dx = model.gridSpacing(), delta = model.horizon();
+  constexpr double smallest = 1e-100, largest = 1e100;
+  constexpr double pi = 3.14159265358979323846;
+  struct Scale {
+    const char* keys;
+    const char* what;
+    const char* unit;
+    double value;
+  };
+  std::vector<Scale> scales = {
+      {"material.young-modulus and material.thickness", "the membrane stiffness E t", "N/m", E * t},
+      {"material.young-modulus and material.thickness", "the bending stiffness E t^3 / (12 (1 - nu^2))", "N m",
+       E * t * t * t / (12.0 * (1.0 - nu * nu))},
+      {"material.density, material.thickness and mesh.spacing", "a node's mass rho t dx^2", "kg", rho * t * dx * dx},
+      {"material.young-modulus and material.density", "the wave speed sqrt(E / rho)", "m/s", std::sqrt(E / rho)}};
+  if (model.numPdElements > 0) {
+    scales.push_back({"material.young-modulus, material.thickness and mesh.spacing",
+                      "the axial micromodulus 6 E / (pi t delta^3 (1 - nu)) (model.md §2)", "N/m^6",
+                      6.0 * E / (pi * t * delta * delta * delta * (1.0 - nu))});
+    if (material.fractureEnergy && *material.fractureEnergy > 0.0)
+      scales.push_back({"material.fracture-energy, material.thickness and mesh.spacing",
+                        "the critical micropotential per length 2 G_c / (t delta^4) (model.md §3)", "J/m^7",
+                        2.0 * *material.fractureEnergy / (t * delta * delta * delta * delta)});
+  }
+  for (const Scale& scale : scales)
+    if (!(std::abs(scale.value) >= smallest && std::abs(scale.value) <= largest)) {
+      std::ostringstream reason;
+      reason << "these values make " << scale.what << " = " << scale.value << " " << scale.unit
+             << ", outside what the solvers can carry in double precision (" << smallest << " to " << largest
+             << " in SI units); check their values and units (SI: Pa, kg/m^3, m)";
+      fail(model.deck, scale.keys, reason.str());
+    }
+}
+
+// A pre-crack cuts through the thickness along its normal (mesh/crack_segment.hpp); a normal
+// in the shell's plane makes the cut the shell's own surface, which separates no bond. The
+// shell normal is taken at the mesh node nearest the crack's midpoint.
+void checkPreCrackNormals(const Model& model) {
+  if (model.deck.mesh.preCracks.empty()) return;
+  const HostQuadMesh& mesh = model.shell.mesh;
+  const auto normals = mesh::computeNodeNormals(Kokkos::DefaultHostExecutionSpace{}, mesh);
+  for (const auto& crack : model.deck.mesh.preCracks) {
+    const auto& segment = crack.segment;
+    const Vector3 middle = {0.5 * (segment.start[0] + segment.end[0]), 0.5 * (segment.start[1] + segment.end[1]),
+                            0.5 * (segment.start[2] + segment.end[2])};
+    LocalIndex nearest = 0;
+    for (LocalIndex node = 1; node < mesh.numNodes(); ++node)
+      if (distanceSquared(middle, nodePosition(mesh, node)) < distanceSquared(middle, nodePosition(mesh, nearest)))
+        nearest = node;
+    double cosine = 0.0;
+    for (int k = 0; k < 3; ++k) cosine += segment.normal[k] * normals(nearest, k);
+    // More than 60 degrees off the shell normal: the cut lies closer to the shell's plane than
+    // across it (a curved shell turns a straight crack's normal by far less along its length).
+    if (std::abs(cosine) < 0.5) {
+      const Vector3 at = nodePosition(mesh, nearest);
+      std::ostringstream reason;
+      reason << "[" << segment.normal[0] << ", " << segment.normal[1] << ", " << segment.normal[2]
+             << "] (unit) is " << std::lround(std::acos(std::abs(cosine)) * 180.0 / 3.14159265358979323846)
+             << " degrees from the shell normal [" << normals(nearest, 0) << ", " << normals(nearest, 1) << ", "
+             << normals(nearest, 2) << "] at the node nearest the crack's middle ([" << at[0] << ", " << at[1]
+             << ", " << at[2] << "] m): the crack would cut along the shell's surface and separate nothing; "
+             << "give the shell normal at the crack";
+      fail(model.deck, "mesh.pre-cracks." + crack.name + ".normal", reason.str());
+    }
+  }
+}
+
 // The supports' sets whose DOFs clamp a PD edge: all three displacements and every rotation
 // but, at most, the drilling one (about the shell normal at each of the set's nodes).
 std::vector<mesh::SupportLayerRequest> clampedSets(const Model& model) {
@@ -297,7 +372,9 @@ Model buildModel(const Deck& deck) {
   LocalIndex next = 0;
   for (LocalIndex node = 0; node < mesh.numNodes(); ++node)
     if (isPdNode[node]) model.pdNodes(next++) = node;
+  checkMaterialScales(model);
   checkPreCracksInPd(model);
+  checkPreCrackNormals(model);
   return model;
 }
 

@@ -1,9 +1,11 @@
 // Gmsh MSH 4.1 import: the hand-written tests/data/plate_4x2.msh equals the generated
 // 0.4 m x 0.2 m plate (nodes, quads, orientation, area, sets); orientation repair; files
-// in the style of Mesh.SaveAll = 0; and one "file:line: reason" message per reader error.
+// in the style of Mesh.SaveAll = 0; one "file:line: reason" message per reader error; and the
+// quad shape checks (coincident corners, zero area, bow-tie, re-entrant corner).
 #include <perishell/mesh/generators.hpp>
 #include <perishell/mesh/gmsh_reader.hpp>
 #include <perishell/mesh/node_geometry.hpp>
+#include <perishell/mesh/quad_shape.hpp>
 
 #include <algorithm>
 #include <array>
@@ -269,13 +271,29 @@ TEST(TEST_CATEGORY, gmsh_written_cylinder_joins_its_patches) {
 
 // A 4-quad Moebius band: rails a0..a3 (tags 1-4) and b0..b3 (tags 5-8); the last quad
 // joins a3-b3 to b0-a0 with a half twist.
+// A Moebius strip of 6 quads (radius 1, width 0.4, a half twist): each quad is a valid shape,
+// the surface is not orientable.
 std::string moebiusText() {
+  const double pi = 3.14159265358979323846;
   std::ostringstream text;
-  text << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 8 1 8\n2 1 0 8\n";
-  for (int tag = 1; tag <= 8; ++tag) text << tag << "\n";
-  for (int i = 0; i < 8; ++i) text << (i % 4) << " " << (i / 4) << " 0\n";
-  text << "$EndNodes\n$Elements\n1 4 1 4\n2 1 3 4\n"
-       << "1 1 2 6 5\n2 2 3 7 6\n3 3 4 8 7\n4 4 5 1 8\n$EndElements\n";
+  text.precision(17);
+  text << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 12 1 12\n2 1 0 12\n";
+  for (int tag = 1; tag <= 12; ++tag) text << tag << "\n";
+  for (int column = 0; column < 6; ++column) {
+    const double angle = 2.0 * pi * column / 6.0;
+    const double across[3] = {std::cos(angle / 2) * std::cos(angle), std::cos(angle / 2) * std::sin(angle),
+                              std::sin(angle / 2)};
+    for (const double side : {-0.2, 0.2})
+      text << std::cos(angle) + side * across[0] << " " << std::sin(angle) + side * across[1] << " "
+           << side * across[2] << "\n";
+  }
+  // Column c has the node tags 2c + 1 (inner side) and 2c + 2; past the last column the
+  // half twist joins the inner side to column 0's outer one.
+  text << "$EndNodes\n$Elements\n1 6 1 6\n2 1 3 6\n";
+  for (int column = 0; column < 5; ++column)
+    text << column + 1 << " " << 2 * column + 1 << " " << 2 * column + 3 << " " << 2 * column + 4 << " "
+         << 2 * column + 2 << "\n";
+  text << "6 11 2 1 12\n$EndElements\n";
   return text.str();
 }
 
@@ -310,7 +328,65 @@ TEST(TEST_CATEGORY, gmsh_reader_errors_name_file_line_and_reason) {
   EXPECT_EQ(readerError(replaced(plate, "14 15 9 10", "14 15 9 14")),
             "mem.msh:79: quad element 11 repeats node tag 14");
   EXPECT_EQ(readerError(moebiusText()),
-            "mem.msh:29: quads 4 and 3 cannot be oriented consistently: the surface is not orientable");
+            "mem.msh:38: quads 5 and 4 cannot be oriented consistently: the surface is not orientable");
+}
+
+// Each defect on its own, in both orientations; a valid quad passes in both orientations and
+// when warped out of its plane.
+TEST(TEST_CATEGORY, quad_shape_check_names_each_defect_in_either_orientation) {
+  using perishell::mesh::checkQuadShape;
+  using perishell::mesh::QuadShapeDefect;
+  using Quad = std::array<std::array<double, 3>, 4>;
+  const auto reversed = [](Quad quad) {
+    std::swap(quad[1], quad[3]);
+    return quad;
+  };
+  const auto defectOf = [&](const Quad& quad) { return checkQuadShape(quad).defect; };
+  const Quad square = {{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}};
+  const Quad warped = {{{0, 0, 0}, {1, 0, 0.05}, {1, 1, 0}, {0, 1, 0.05}}};
+  const Quad skewed = {{{0, 0, 0}, {2e-3, 0, 0}, {3e-3, 1e-3, 0}, {1e-3, 1e-3, 0}}};
+  for (const Quad& valid : {square, warped, skewed}) {
+    EXPECT_EQ(defectOf(valid), QuadShapeDefect::none);
+    EXPECT_EQ(defectOf(reversed(valid)), QuadShapeDefect::none);
+  }
+  const Quad coincident = {{{0, 0, 0}, {1, 0, 0}, {1, 0, 0}, {0, 1, 0}}};
+  const auto check = checkQuadShape(coincident);
+  EXPECT_EQ(check.defect, QuadShapeDefect::coincidentCorners);
+  EXPECT_EQ(check.corner, 1);
+  EXPECT_EQ(check.otherCorner, 2);
+  const Quad collinear = {{{0, 0, 0}, {1, 0, 0}, {0.7, 0, 0}, {0.5, 0, 0}}};
+  EXPECT_EQ(defectOf(collinear), QuadShapeDefect::zeroArea);
+  // A symmetric bow-tie (no net area) and a lopsided one (the lobes' areas differ).
+  const Quad figureEight = {{{0, 0, 0}, {1, 1, 0}, {1, 0, 0}, {0, 1, 0}}};
+  const Quad lopsided = {{{0, 0, 0}, {2, 0, 0}, {0, 1, 0}, {1, 1, 0}}};
+  for (const Quad& crossing : {figureEight, lopsided}) {
+    EXPECT_EQ(defectOf(crossing), QuadShapeDefect::selfCrossing);
+    EXPECT_EQ(defectOf(reversed(crossing)), QuadShapeDefect::selfCrossing);
+  }
+  const Quad dart = {{{0, 0, 0}, {1, 0, 0}, {0.3, 0.3, 0}, {0, 1, 0}}};
+  EXPECT_EQ(checkQuadShape(dart).defect, QuadShapeDefect::reentrantCorner);
+  EXPECT_EQ(checkQuadShape(dart).corner, 2);
+  EXPECT_EQ(checkQuadShape(reversed(dart)).corner, 2);
+  const Quad straightCorner = {{{0, 0, 0}, {1, 0, 0}, {0.5, 0.5, 0}, {0, 1, 0}}};
+  EXPECT_EQ(checkQuadShape(straightCorner).defect, QuadShapeDefect::reentrantCorner);
+  EXPECT_EQ(checkQuadShape(straightCorner).corner, 2);
+}
+
+// The reader refuses a quad it cannot build an element on, by tags and line, before anything
+// is built (element 5 of plate_4x2.msh, file line 73, is the first quad of node 13).
+TEST(TEST_CATEGORY, gmsh_reader_refuses_misshapen_quads_by_tags_and_line) {
+  const std::string plate = plateText();
+  EXPECT_EQ(readerError(replaced(plate, "\n5 1 5 13 12\n", "\n5 1 13 5 12\n")),
+            "mem.msh:73: quad element 5 (node tags 1 13 5 12) crosses itself (a bow-tie): its nodes are not "
+            "listed in order around its outline");
+  EXPECT_EQ(readerError(replaced(plate, "\n0.1 0.1 0\n", "\n0.03 0.03 0\n")),
+            "mem.msh:73: quad element 5 (node tags 1 5 13 12) is not convex: its corner at node 13 points "
+            "inward or is straight, where the element map folds");
+  EXPECT_EQ(readerError(replaced(plate, "\n0.1 0.1 0\n", "\n0.1 0 0\n")),
+            "mem.msh:73: quad element 5 (node tags 1 5 13 12): nodes 5 and 13 are at the same point; a quad "
+            "needs four distinct corners");
+  EXPECT_EQ(readerError(replaced(replaced(plate, "\n0 0.1 0\n", "\n0.05 0 0\n"), "\n0.1 0.1 0\n", "\n0.07 0 0\n")),
+            "mem.msh:73: quad element 5 (node tags 1 5 13 12) has zero area: its nodes lie on one line");
 }
 
 }  // namespace gmsh_reader_test

@@ -129,6 +129,46 @@ TEST(TEST_CATEGORY, model_pre_crack_removes_bonds_and_must_lie_in_pd) {
       << deckErrorKey(plateDeck(ccmBox, crack));
 }
 
+// A pre-crack normal in the shell's plane would cut along the surface and separate nothing:
+// refused by its key; 45 degrees off the shell normal still cuts through the thickness.
+TEST(TEST_CATEGORY, model_pre_crack_normal_in_the_shell_plane_is_refused) {
+  const auto crackWithNormal = [](const std::string& normal) {
+    return "    pre-cracks:\n      slit: {start: [0.0, 0.0055, 0.0], end: [0.010, 0.0055, 0.0], normal: " + normal +
+           "}\n";
+  };
+  const std::string inPlane = deckErrorKey(plateDeck("    default: pd\n", crackWithNormal("[0, 1, 0]")));
+  EXPECT_EQ(inPlane.rfind("mesh.pre-cracks.slit.normal: [0, 1, 0] (unit) is 90 degrees from the shell normal [0, 0, 1]", 0),
+            0u)
+      << inPlane;
+  EXPECT_NE(inPlane.find("separate nothing"), std::string::npos) << inPlane;
+  const auto tilted = build(plateDeck("    default: pd\n", crackWithNormal("[0, 1, 1]")));
+  const auto intact = build(plateDeck("    default: pd\n"));
+  EXPECT_GT(bondCount<TEST_EXECSPACE>(intact) - bondCount<TEST_EXECSPACE>(tilted), 100u);
+}
+
+// Extreme but finite material values are refused by their keys, naming the scale that leaves
+// double precision, before any solver reports a symptom of it.
+TEST(TEST_CATEGORY, model_material_values_whose_products_overflow_or_underflow_are_refused) {
+  const auto withMaterial = [](const std::string& from, const std::string& to) {
+    std::string text = plateDeck("    default: pd\n");
+    text.replace(text.find(from), from.size(), to);
+    return deckErrorKey(text);
+  };
+  const std::string thin = withMaterial("thickness: 1.0e-3", "thickness: 1.0e-200");
+  EXPECT_EQ(thin.rfind("material.young-modulus and material.thickness: these values make the membrane stiffness E t = "
+                       "7.2e-190 N/m, outside what the solvers can carry in double precision (1e-100 to 1e+100 in SI "
+                       "units)",
+                       0),
+            0u)
+      << thin;
+  const std::string bending = withMaterial("thickness: 1.0e-3", "thickness: 1.0e-40");
+  EXPECT_NE(bending.find("the bending stiffness E t^3 / (12 (1 - nu^2)) = 6.59341e-111 N m"), std::string::npos) << bending;
+  const std::string heavy = withMaterial("density: 2440.0", "density: 1.0e300");
+  EXPECT_EQ(heavy.rfind("material.density, material.thickness and mesh.spacing: these values make a node's mass", 0), 0u)
+      << heavy;
+  EXPECT_EQ(withMaterial("thickness: 1.0e-3", "thickness: 1.0e-9"), "no error");
+}
+
 TEST(TEST_CATEGORY, model_deck_node_sets_and_unknown_sets) {
   const std::string flank = "    node-sets:\n      flank: {box: {min: [0.0095, 0.0, -1], max: [0.0105, 0.0025, 1]}}\n";
   const auto model = build(plateDeck("    default: pd\n", flank,
