@@ -2,6 +2,7 @@
 // pass through to Kokkos.
 #include <perishell/cases/pressurised_membrane.hpp>
 #include <perishell/core/runtime.hpp>
+#include <perishell/core/stop_request.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/model.hpp>
 #include <perishell/solvers/explicit/explicit_run.hpp>
@@ -33,7 +34,10 @@ Commands:
                   DIR is output.directory of the deck unless --output DIR is given. Explicit
                   and implicit decks run CCM-only, 100 % PD or mixed models. Also writes
                   DIR/timings.csv (phase,seconds). Exit 1 with the reason on a bad deck, an
-                  unstable explicit run or an increment Newton cannot converge.
+                  unstable explicit run or an increment Newton cannot converge. SIGINT
+                  (Ctrl-C) or SIGTERM stops the run after its current step or increment,
+                  written, with its summary, and exit status 130 or 143; a second one stops
+                  it at once.
       --backend B     device (default): the build's default device (CUDA in a CUDA build);
                       host: its host space (OpenMP), the CPU baseline of the same kernels.
                       In an OpenMP build both are the same.
@@ -243,10 +247,18 @@ int runDeck(const std::vector<std::string>& args) {
               100.0 * model.pdRatio(), withThousands(model.freeDofCount()).c_str());
   printMeshNotes(model);
   std::fflush(stdout);
-  if (deck.solver.type == perishell::deck::SolverType::Explicit)
-    perishell::solvers::runExplicit(model, parsed.run, std::cout);
-  else
-    perishell::solvers::runImplicit(model, parsed.run, std::cout);
+  perishell::installStopRequestHandlers();
+  const int stoppedBy = deck.solver.type == perishell::deck::SolverType::Explicit
+                            ? perishell::solvers::runExplicit(model, parsed.run, std::cout).stoppedBySignal
+                            : perishell::solvers::runImplicit(model, parsed.run, std::cout).stoppedBySignal;
+  if (stoppedBy != 0) {
+    std::cout.flush();
+    std::fprintf(stderr,
+                 "perishell: stopped by %s before the deck's end; the results hold the states up to the last one "
+                 "in the summary\n",
+                 perishell::stopSignalName(stoppedBy));
+    return 128 + stoppedBy;
+  }
   return 0;
 }
 

@@ -1,8 +1,10 @@
 #include <perishell/io/atomic_file.hpp>
 #include <perishell/io/csv_history.hpp>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 #include <utility>
 
@@ -19,28 +21,26 @@ CsvHistory::CsvHistory(std::string path, std::vector<std::string> columnNames)
                                   " name '" + name +
                                   "' must be non-empty and free of commas, quotes and line breaks");
   }
-  flush();
+  std::string header;
+  for (std::size_t column = 0; column < columnNames_.size(); ++column)
+    header += (column == 0 ? "" : ",") + columnNames_[column];
+  writeFileAtomically(path_, header + '\n');
+  file_.reset(std::fopen(path_.c_str(), "a"));
+  if (!file_) throw std::runtime_error("cannot open the history '" + path_ + "' to append: " + std::strerror(errno));
 }
 
-void CsvHistory::append(std::vector<double> row) {
+void CsvHistory::append(const std::vector<double>& row) {
   if (row.size() != columnNames_.size())
-    throw std::invalid_argument("CSV history '" + path_ + "': row " + std::to_string(rows_.size()) + " has " +
+    throw std::invalid_argument("CSV history '" + path_ + "': row " + std::to_string(numRows_) + " has " +
                                 std::to_string(row.size()) + " values, expected " +
                                 std::to_string(columnNames_.size()));
-  rows_.push_back(std::move(row));
-}
-
-void CsvHistory::flush() const {
-  std::string text;
-  for (std::size_t column = 0; column < columnNames_.size(); ++column)
-    text += (column == 0 ? "" : ",") + columnNames_[column];
-  text += '\n';
-  for (const auto& row : rows_) {
-    for (std::size_t column = 0; column < row.size(); ++column)
-      text += (column == 0 ? "" : ",") + formatCsvValue(row[column]);
-    text += '\n';
-  }
-  writeFileAtomically(path_, text);
+  std::string line;
+  for (std::size_t column = 0; column < row.size(); ++column)
+    line += (column == 0 ? "" : ",") + formatCsvValue(row[column]);
+  line += '\n';
+  if (std::fwrite(line.data(), 1, line.size(), file_.get()) != line.size() || std::fflush(file_.get()) != 0)
+    throw std::runtime_error("cannot append to the history '" + path_ + "': " + std::strerror(errno));
+  ++numRows_;
 }
 
 std::string formatCsvValue(double value) {

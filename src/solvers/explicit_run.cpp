@@ -1,3 +1,4 @@
+#include <perishell/core/stop_request.hpp>
 #include <perishell/io/csv_history.hpp>
 #include <perishell/io/output_directory.hpp>
 #include <perishell/io/progress.hpp>
@@ -140,7 +141,6 @@ class RunOutput {
     }
     for (auto& field : fields) field = io::firstNodes(field, model_.numMeshNodes());
     writer_.writeStep(solver_.time(), fields);
-    history_->flush();
   }
 
   // energy: the row's state's (Solver::checkState(), which also leaves its forces for the reactions).
@@ -324,6 +324,7 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   io::ProgressReporter progress(totalSteps, log);
   const long long fieldEvery = deck.output.every, historyEvery = deck.output.historyEvery;
   long long switches = 0;
+  int stoppedBy = 0;
   while (solver.stepIndex() < totalSteps) {
     try {
       solver.step();
@@ -347,7 +348,9 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
       }
       adaptiveSeconds += fencedSecondsSince(space, checkStart);
     }
-    const bool last = step == totalSteps;
+    // A stop request (SIGINT, SIGTERM) ends the run here, with this step written as the last.
+    stoppedBy = stopRequestSignal();
+    const bool last = step == totalSteps || stoppedBy != 0;
     const bool historyDue = last || step % historyEvery == 0;
     const bool fieldsDue = last || (fieldEvery > 0 && step % fieldEvery == 0);
     outputStart = Clock::now();
@@ -359,10 +362,12 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
     }
     outputSeconds += std::chrono::duration<double>(Clock::now() - outputStart).count();
     progress.update(step, solver.time());
+    if (stoppedBy != 0) break;
   }
   space.fence();
   ExplicitRunSummary summary;
-  summary.steps = totalSteps;
+  summary.steps = solver.stepIndex();
+  summary.stoppedBySignal = stoppedBy;
   summary.timeStep = solver.timeStep();
   summary.criticalTimeStep = solver.criticalTimeStep();
   summary.endTime = solver.time();
@@ -390,11 +395,13 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   balance << energy.balanceError();
   io::SummaryTable table("explicit run summary");
   table.add("backend", ExecutionSpaceT::name())
-      .add("steps", std::to_string(totalSteps) + (totalSteps < deckSteps ? " of " + std::to_string(deckSteps) : ""))
+      .add("steps", std::to_string(summary.steps) +
+                        (summary.steps < deckSteps ? " of " + std::to_string(deckSteps) : "") +
+                        (stoppedBy != 0 ? std::string(" (stopped by ") + stopSignalName(stoppedBy) + ")" : ""))
       .add("time step", formatSeconds(summary.timeStep) + " (critical " + formatSeconds(summary.criticalTimeStep) + ")")
       .add("simulated time", formatSeconds(summary.endTime))
       .add("wall time", io::formatDuration(summary.wallSeconds) + " (" +
-                            formatSeconds(summary.wallSeconds / double(totalSteps)) + " per step)");
+                            formatSeconds(summary.wallSeconds / double(std::max(1LL, summary.steps))) + " per step)");
   if (runOptions.timePhases)
     table.add("  forces", formatSeconds(phase.forces))
         .add("  integration", formatSeconds(phase.integration))

@@ -1,4 +1,5 @@
 #include <perishell/core/fenced_seconds.hpp>
+#include <perishell/core/stop_request.hpp>
 #include <perishell/io/csv_history.hpp>
 #include <perishell/io/output_directory.hpp>
 #include <perishell/io/progress.hpp>
@@ -86,7 +87,6 @@ class ImplicitOutput {
     }
     for (auto& field : fields) field = io::firstNodes(field, model_.numMeshNodes());
     writer_.writeStep(solver_.loadFactor(), fields);
-    history_->flush();
   }
 
   // Returns the largest nodal displacement magnitude.
@@ -260,7 +260,10 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
     summary.linearIterations += report.linearIterations;
     summary.preconditionerBuilds += report.preconditionerBuilds;
     taken = increment;
-    const bool last = increment == increments || (arcLength && solver.loadFactor() >= 1.0);
+    // A stop request (SIGINT, SIGTERM) ends the run after this converged increment, written.
+    summary.stoppedBySignal = stopRequestSignal();
+    const bool last = increment == increments || (arcLength && solver.loadFactor() >= 1.0) ||
+                      summary.stoppedBySignal != 0;
     const bool historyDue = last || increment % deck.output.historyEvery == 0;
     const bool fieldsDue = last || (deck.output.every > 0 && increment % deck.output.every == 0);
     outputStart = Clock::now();
@@ -274,7 +277,8 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   summary.increments = taken;
   // Arc-length control that ran out of increments short of the full load did not finish the
   // deck's job: an error after the summary, unless --max-steps asked for fewer increments.
-  const bool stoppedShort = arcLength && solver.loadFactor() < 1.0 && increments == deckIncrements;
+  const bool stoppedShort =
+      arcLength && solver.loadFactor() < 1.0 && increments == deckIncrements && summary.stoppedBySignal == 0;
   summary.wallSeconds = std::chrono::duration<double>(Clock::now() - runStart).count();
   summary.xdmfPath = output.xdmfPath();
   summary.historyPath = output.historyPath();
@@ -291,9 +295,12 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   io::SummaryTable("implicit run summary")
       .add("backend", ExecutionSpaceT::name())
       .add("increments", std::to_string(taken) +
-                             (!arcLength && increments < deckIncrements ? " of " + std::to_string(deckIncrements)
-                                                                        : std::string()) +
-                             " (" + std::to_string(summary.cuts) + " cuts)")
+                             (!arcLength && taken < deckIncrements ? " of " + std::to_string(deckIncrements)
+                                                                   : std::string()) +
+                             " (" + std::to_string(summary.cuts) + " cuts)" +
+                             (summary.stoppedBySignal != 0
+                                  ? std::string(", stopped by ") + stopSignalName(summary.stoppedBySignal)
+                                  : std::string()))
       .add("load factor", formatNumber(solver.loadFactor(), 6) + (arcLength ? " (arc-length control)" : ""))
       .add("Newton iterations", std::to_string(summary.newtonIterations) + " (" +
                                     std::to_string(summary.lineSearches) + " shortened by the line search)")

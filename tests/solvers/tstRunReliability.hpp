@@ -2,7 +2,9 @@
 // two energy-monitor steps stops at its next write or its last step, naming the step, the
 // quantity and the deck's likely cause (never a key the deck does not set); Newton's
 // solver.max-cuts bounds the cuts of an increment in all; a run refuses an output directory
-// another run holds, and a rerun leaves none of an earlier run's step files.
+// another run holds, and a rerun leaves none of an earlier run's step files; a stop request
+// (SIGINT, SIGTERM) ends a run after its current step or increment, written, with its summary.
+#include <perishell/core/stop_request.hpp>
 #include <perishell/io/output_directory.hpp>
 #include <perishell/model/model.hpp>
 #include <perishell/solvers/explicit/central_difference.hpp>
@@ -19,6 +21,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -243,4 +246,42 @@ TEST(TEST_CATEGORY, run_refuses_a_held_output_directory_and_a_rerun_leaves_no_st
   EXPECT_EQ(names, (std::vector<std::string>{"history.csv", "results.xmf", "results_000000.h5", "results_000001.h5",
                                              "results_000002.h5", "results_mesh.h5", "timings.csv"}));
   EXPECT_EQ(gridsIn(directory.path() + "/results.xmf"), 3);
+}
+
+// A stop request taken before the run (as if SIGTERM came during the first step): the explicit
+// run ends after step 1 with that step written and counted, the implicit one after increment 1
+// of 4; both say so in the summary and return the signal.
+TEST(TEST_CATEGORY, a_stop_request_ends_a_run_after_its_current_step_written) {
+  using namespace perishell_test_run_files;
+  struct ClearStopRequest {  // whatever fails here, later tests run unstopped
+    ~ClearStopRequest() { perishell::requestStop(0); }
+  } clearStopRequest;
+  const RunDirectory explicitDirectory, implicitDirectory;
+  const auto explicitModel = perishell::model::buildModel(
+      perishell::parseDeck(plateDeck("50.0e6", "{type: explicit, steps: 50}", "{every: 10, history: [energy]}"),
+                           "plate.yaml"));
+  std::ostringstream explicitLog;
+  perishell::requestStop(SIGTERM);
+  const auto explicitSummary =
+      perishell::solvers::runExplicit(explicitModel, {explicitDirectory.path(), backendOf<TEST_EXECSPACE>()}, explicitLog);
+  EXPECT_EQ(explicitSummary.stoppedBySignal, SIGTERM);
+  EXPECT_EQ(explicitSummary.steps, 1);
+  EXPECT_NE(explicitLog.str().find("steps                 1 of 50 (stopped by SIGTERM)"), std::string::npos)
+      << explicitLog.str();
+  const auto explicitHistory = readHistory(explicitDirectory.path() + "/history.csv");
+  ASSERT_EQ(explicitHistory.rows.size(), 2u);  // step 0 and the step it stopped at
+  EXPECT_EQ(explicitHistory.rows.back().at("step"), 1.0);
+  EXPECT_EQ(gridsIn(explicitDirectory.path() + "/results.xmf"), 2);
+
+  const auto implicitModel = perishell::model::buildModel(perishell::parseDeck(
+      plateDeck("1.0e6", "{type: implicit, increments: 4}", "{every: 1}", false), "plate.yaml"));
+  std::ostringstream implicitLog;
+  perishell::requestStop(SIGINT);
+  const auto implicitSummary =
+      perishell::solvers::runImplicit(implicitModel, {implicitDirectory.path(), backendOf<TEST_EXECSPACE>()}, implicitLog);
+  EXPECT_EQ(implicitSummary.stoppedBySignal, SIGINT);
+  EXPECT_EQ(implicitSummary.increments, 1);
+  EXPECT_NE(implicitLog.str().find("1 of 4 (0 cuts), stopped by SIGINT"), std::string::npos) << implicitLog.str();
+  EXPECT_EQ(readHistory(implicitDirectory.path() + "/history.csv").rows.size(), 1u);
+  EXPECT_EQ(gridsIn(implicitDirectory.path() + "/results.xmf"), 2);  // the initial state and increment 1
 }

@@ -1,7 +1,9 @@
 #pragma once
-// A CSV time history (energies, reaction forces, crack length, ... per step). Rows are kept
-// in memory and flush() rewrites the whole file atomically (atomic_file.hpp), so the file on
-// disk is always a complete table up to the last flush, even if the run is killed.
+// A CSV time history (energies, reaction forces, crack length, ... per step). The header is
+// written atomically when the history is made (atomic_file.hpp); each row is then appended to
+// the file as it comes, in one write, so a running or killed run's history.csv holds every row
+// so far, and a row costs its own line whatever the run's length. A kill inside that one write
+// can leave a partial last line; the rows before it stay whole.
 //
 // Format: one header line with the column names as given (put the unit in the name, e.g.
 // "time [s]"), then one line per row, comma separated, no spaces. Values are printed with
@@ -10,6 +12,8 @@
 // literally as "nan", "inf" or "-inf" (strtod reads them back; the sign and payload of a
 // NaN are not kept).
 #include <cstddef>
+#include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -21,20 +25,22 @@ class CsvHistory {
   // step. Column names must be non-empty and free of commas, quotes and line breaks.
   CsvHistory(std::string path, std::vector<std::string> columnNames);
 
-  // Throws std::invalid_argument naming the expected and actual value counts.
-  void append(std::vector<double> row);
-
-  // Rewrites the file with the header and every row appended so far.
-  void flush() const;
+  // Appends the row to the file. Throws std::invalid_argument naming the expected and actual
+  // value counts, std::runtime_error naming the file when the write fails (a full disk).
+  void append(const std::vector<double>& row);
 
   const std::string& path() const { return path_; }
   const std::vector<std::string>& columnNames() const { return columnNames_; }
-  std::size_t numRows() const { return rows_.size(); }
+  std::size_t numRows() const { return numRows_; }
 
  private:
+  struct CloseFile {
+    void operator()(std::FILE* file) const { std::fclose(file); }
+  };
   std::string path_;
   std::vector<std::string> columnNames_;
-  std::vector<std::vector<double>> rows_;
+  std::size_t numRows_ = 0;
+  std::unique_ptr<std::FILE, CloseFile> file_;
 };
 
 // The text CsvHistory writes for one value.

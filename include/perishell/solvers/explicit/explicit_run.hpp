@@ -29,6 +29,7 @@ struct ExplicitRunSummary {
   PhaseTimes phases;  // as written to timingsPath
   std::string xdmfPath, historyPath, timingsPath;
   std::optional<CrackTip> crackTip;  // at the last history row, when the history tracks it
+  int stoppedBySignal = 0;           // SIGINT/SIGTERM that ended the run early (core/stop_request.hpp)
 };
 
 // Throws std::invalid_argument (naming the deck key) for models the explicit solver cannot

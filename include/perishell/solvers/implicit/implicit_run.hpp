@@ -24,6 +24,7 @@ struct ImplicitRunSummary {
   double maxDisplacement = 0.0;  // largest |u| of a node at the end [m]
   PhaseTimes phases;  // as written to timingsPath
   std::string xdmfPath, historyPath, timingsPath;
+  int stoppedBySignal = 0;  // SIGINT/SIGTERM that ended the run after an increment (core/stop_request.hpp)
 };
 
 // Throws NewtonFailure (after writing the last converged state) when an increment cannot be
