@@ -4,6 +4,8 @@
 #include <perishell/io/deck.hpp>
 #include <perishell/solvers/history_columns.hpp>
 
+#include <test_files.hpp>
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -20,18 +22,9 @@ namespace {
 using namespace perishell;
 namespace fs = std::filesystem;
 
-// This header's directory is tests/io, whatever the build directory.
-const fs::path testsDirectory = fs::path(__FILE__).parent_path().parent_path();
-// tests/data, or PERISHELL_TEST_DATA_DIR where the binaries run away from the source tree.
-const fs::path testDataDirectory =
-    std::getenv("PERISHELL_TEST_DATA_DIR") ? fs::path(std::getenv("PERISHELL_TEST_DATA_DIR")) : testsDirectory / "data";
-
-std::string readText(const fs::path& path) {
-  std::ifstream file(path);
-  std::ostringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
+using perishell_test::testDataDirectory;
+using perishell_test::testsDirectory;
+const auto& readText = perishell_test::readTextFile;
 
 // A scratch directory per process (OpenMP and CUDA binaries may run at the same time).
 fs::path scratchDirectory() {
