@@ -26,7 +26,9 @@
 #include <perishell/core/dual.hpp>
 #include <perishell/core/rotation.hpp>
 #include <perishell/mesh/bilinear_quad.hpp>
+#include <perishell/mesh/quad_shape.hpp>
 
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -150,41 +152,32 @@ KOKKOS_INLINE_FUNCTION double shellReferenceArea(const double referencePositions
   return 0.5 * rotation::norm(normal);
 }
 
-// Rejects an element the formulation cannot represent: non-finite coordinates, (near) zero
-// area, or a corner where the bilinear map folds (non-convex, bow-tie, or nodes not in
-// counter-clockwise order around a convex outline). `element` names it in the message.
+// Rejects an element the formulation cannot represent: non-finite coordinates, or a shape the
+// bilinear map cannot carry (mesh/quad_shape.hpp: coincident corners, zero area, a bow-tie, a
+// re-entrant or straight corner; either node order is fine). `element` names it in the message.
 inline void checkShellElement(const double referencePositions[4][3], long element) {
   const std::string name = "shell element " + std::to_string(element) + ": ";
+  std::array<std::array<double, 3>, 4> corners;
   for (int a = 0; a < 4; ++a)
-    for (int k = 0; k < 3; ++k)
+    for (int k = 0; k < 3; ++k) {
       if (!std::isfinite(referencePositions[a][k]))
         throw std::invalid_argument(name + "node " + std::to_string(a) + " has a non-finite coordinate");
-  double diagonalLengthProduct = 1.0;
-  for (int pair = 0; pair < 2; ++pair) {
-    double squared = 0.0;
-    for (int k = 0; k < 3; ++k) {
-      const double component = referencePositions[pair + 2][k] - referencePositions[pair][k];
-      squared += component * component;
+      corners[a][k] = referencePositions[a][k];
     }
-    diagonalLengthProduct *= std::sqrt(squared);
-  }
-  const double area = shellReferenceArea(referencePositions);
-  // A collinear or coincident layout leaves the normal (and the frame) undefined.
-  if (!(area > 1e-12 * diagonalLengthProduct))
-    throw std::invalid_argument(name + "zero or negative area (" + std::to_string(area) +
-                                " m^2): collinear or coincident nodes");
-  const ShellReference reference = shellReference(referencePositions);
-  for (int a = 0; a < 4; ++a) {
-    const int next = (a + 1) % 4, previous = (a + 3) % 4;
-    const double toNext[2] = {reference.local[next][0] - reference.local[a][0],
-                              reference.local[next][1] - reference.local[a][1]};
-    const double toPrevious[2] = {reference.local[previous][0] - reference.local[a][0],
-                                  reference.local[previous][1] - reference.local[a][1]};
-    // Twice the corner triangle's area: the Jacobian determinant of the bilinear map there.
-    const double cornerArea = toNext[0] * toPrevious[1] - toNext[1] * toPrevious[0];
-    if (!(cornerArea > 1e-8 * area))
-      throw std::invalid_argument(name + "zero or negative area at corner " + std::to_string(a) +
-                                  " (non-convex or twisted quad; nodes must be counter-clockwise)");
+  const mesh::QuadShapeCheck shape = mesh::checkQuadShape(corners);
+  switch (shape.defect) {
+    case mesh::QuadShapeDefect::none:
+      return;
+    case mesh::QuadShapeDefect::coincidentCorners:
+      throw std::invalid_argument(name + "zero or negative area: nodes " + std::to_string(shape.corner) + " and " +
+                                  std::to_string(shape.otherCorner) + " coincide");
+    case mesh::QuadShapeDefect::zeroArea:
+      throw std::invalid_argument(name + "zero or negative area: collinear nodes");
+    case mesh::QuadShapeDefect::selfCrossing:
+      throw std::invalid_argument(name + "zero or negative area: the outline crosses itself (a bow-tie)");
+    case mesh::QuadShapeDefect::reentrantCorner:
+      throw std::invalid_argument(name + "zero or negative area at corner " + std::to_string(shape.corner) +
+                                  " (a re-entrant or straight corner)");
   }
 }
 
