@@ -4,8 +4,8 @@
 // the Gmsh reader. Every input must end in a value or a std::exception whose message starts with
 // the file's name and shows no internals (library names, C++ scopes, source files, build paths,
 // unless the input itself holds that text and the message quotes it);
-// a crash or a sanitizer report fails the test binary. A hang guard stops at 10 s per input
-// (inputs are < 4 kB and take milliseconds; the bound only catches runaways).
+// a crash or a sanitizer report fails the test binary, and a runaway input fails it by ctest's
+// timeout (the inputs are < 4 kB and take milliseconds; no wall time is asserted here).
 #include <perishell/io/deck.hpp>
 #include <perishell/mesh/gmsh_reader.hpp>
 #include <perishell/model/model.hpp>
@@ -14,7 +14,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -108,10 +107,6 @@ void expectUserTermsOnly(const std::string& message, const std::string& source, 
                                                            << "\n--- input:\n" << input;
 }
 
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 // Model sizes a mutation can ask for are bounded here, not by the reader (a 1e8-node plate is a
 // valid deck): models estimated over 20,000 nodes are only parsed.
 bool smallEnoughToBuild(const perishell::Deck& deck, const perishell::Deck& seed) {
@@ -135,7 +130,6 @@ TEST(TEST_CATEGORY, fuzzed_decks_end_in_a_model_or_a_message_in_the_users_terms)
     const perishell::Deck seedDeck = perishell::parseDeck(seedText, seedPath.string());
     for (int k = 0; k < 500; ++k, ++inputs) {
       const std::string text = mutate(seedText, random);
-      const auto start = std::chrono::steady_clock::now();
       try {
         const perishell::Deck deck = perishell::parseDeck(text, seedPath.string());
         if (smallEnoughToBuild(deck, seedDeck)) {
@@ -146,7 +140,6 @@ TEST(TEST_CATEGORY, fuzzed_decks_end_in_a_model_or_a_message_in_the_users_terms)
         ++refused;
         expectUserTermsOnly(error.what(), seedPath.string(), text);
       }
-      EXPECT_LT(secondsSince(start), 10.0) << "runaway on:\n" << text;
     }
   }
   std::printf("fuzzed decks: %d inputs from %zu seeds, %d refused, %d models built\n", inputs, seeds.size(), refused,
@@ -162,14 +155,12 @@ TEST(TEST_CATEGORY, fuzzed_gmsh_files_end_in_a_mesh_or_a_file_line_message) {
   const int inputs = 10000;
   for (int k = 0; k < inputs; ++k) {
     const std::string text = mutate(seed, random);
-    const auto start = std::chrono::steady_clock::now();
     try {
       perishell::mesh::parseGmsh(text, "fuzz.msh");
     } catch (const std::exception& error) {
       ++refused;
       expectUserTermsOnly(error.what(), "fuzz.msh:", text);
     }
-    EXPECT_LT(secondsSince(start), 10.0) << "runaway on:\n" << text;
   }
   std::printf("fuzzed Gmsh files: %d inputs, %d refused\n", inputs, refused);
   EXPECT_GT(refused, inputs / 2);
