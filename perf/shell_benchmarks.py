@@ -14,6 +14,7 @@ factorizations (medians over --repeats runs for the time).
 Writes OUT/<case>/ (mesh, deck, runs) and OUT/shell_benchmarks.md.
 """
 import argparse
+import csv
 import math
 import os
 import re
@@ -97,9 +98,11 @@ def slit_plate(directory, scale):
     probeB: {type: point-force, set: B, vector: [0.0, 0.0, 0.0]}""", 20, 0.4 / scale)
 
 
-def hemisphere(directory, scale):
+def hemisphere(directory, scale, force=200.0, title="Sze 3.4 hemispherical shell", increments=20):
     """Sze 3.4: R 10, h 0.04, E 6.825e7, nu 0.3, 18 degree hole; quarter with symmetry planes,
-    radial forces 200 (the full shell's 400, halved on the planes), pull at A, push at B."""
+    radial forces 200 (the full shell's 400, halved on the planes), pull at A, push at B;
+    16 x 16 at scale 1. The MacNeal-Harder pinched hemisphere is the same shell under 2 (1 on
+    each plane's point)."""
     n = 16 * scale
     psi0 = math.radians(18.0)
     nodes, quads, node = grid(n, n, lambda a, b: (
@@ -110,14 +113,14 @@ def hemisphere(directory, scale):
         "y0": (1, edge(node, [(i, 0) for i in range(n + 1)])),
         "x0": (1, edge(node, [(i, n) for i in range(n + 1)])),
         "A": (0, [node(n, 0)]), "B": (0, [node(n, n)]), "pin": (0, [node(0, 0)])})
-    return deck("Sze 3.4 hemispherical shell", 6.825e7, 0.3, 0.04, """
+    return deck(title, 6.825e7, 0.3, 0.04, f"""
   supports:
-    symmetryY: {set: y0, dofs: [uy, rx, rz]}
-    symmetryX: {set: x0, dofs: [ux, ry, rz]}
-    pin: {set: pin, dofs: [uz]}
+    symmetryY: {{set: y0, dofs: [uy, rx, rz]}}
+    symmetryX: {{set: x0, dofs: [ux, ry, rz]}}
+    pin: {{set: pin, dofs: [uz]}}
   loads:
-    pull: {type: point-force, set: A, vector: [200.0, 0.0, 0.0]}
-    push: {type: point-force, set: B, vector: [0.0, -200.0, 0.0]}""", 20, 0.98 / scale)
+    pull: {{type: point-force, set: A, vector: [{force}, 0.0, 0.0]}}
+    push: {{type: point-force, set: B, vector: [0.0, {-force}, 0.0]}}""", increments, 0.98 / scale)
 
 
 def roof(directory, scale):
@@ -143,7 +146,92 @@ def roof(directory, scale):
                 "control: arc-length, max-increments: 200")
 
 
-def deck(title, young, poisson, thickness, actions, increments, spacing, control="control: load"):
+# MacNeal & Harder (1985), "A proposed standard set of problems to test finite element accuracy",
+# Finite Elements in Analysis and Design 1: 3-20: linear problems. Where the reference load
+# bends the shell by more than ~1e-4 of its size, the load is scaled down (load_scale) so that
+# the geometrically nonlinear solver answers the linear problem; the reported displacement is
+# the probe's divided by load_scale. Smaller scales than 1e-3 reach the round-off floor of
+# the total-form corotational force (displacements ~1e-10 of the coordinates).
+
+
+def scordelis_lo(directory, scale, load_scale):
+    """Scordelis-Lo roof: R 25, L 50, 80 degree arc, t 0.25, E 4.32e8, nu 0, self-weight 90 per
+    unit area; ends on rigid diaphragms (uy = uz = 0), long edges free. Quarter (x to midspan,
+    crown to free edge), 16 x 16 at scale 1. Reference: vertical deflection at the midspan of
+    the free edge, 0.3024."""
+    n = 16 * scale
+    phi = math.radians(40.0)
+    nodes, quads, node = grid(n, n, lambda a, b: (25.0 * a, 25.0 * math.sin(phi * b), 25.0 * math.cos(phi * b)))
+    write_msh(os.path.join(directory, "mesh.msh"), nodes, quads, {
+        "diaphragm": (1, edge(node, [(0, j) for j in range(n + 1)])),
+        "midspan": (1, edge(node, [(n, j) for j in range(n + 1)])),
+        "crown": (1, edge(node, [(i, 0) for i in range(n + 1)]))})
+    return deck("MacNeal-Harder Scordelis-Lo roof", 4.32e8, 0.0, 0.25, f"""
+  supports:
+    diaphragm: {{set: diaphragm, dofs: [uy, uz]}}
+    symmetryX: {{set: midspan, dofs: [ux, ry, rz]}}
+    symmetryY: {{set: crown, dofs: [uy, rx, rz]}}
+  loads:
+    weight: {{type: pressure, vector: [0.0, 0.0, {-90.0 * load_scale}]}}""", 1, 25.0 / n,
+                probes={"A": (25.0, 25.0 * math.sin(phi), 25.0 * math.cos(phi))})
+
+
+def pinched_hemisphere(directory, scale, load_scale):
+    """Pinched hemisphere with an 18 degree hole: Sze 3.4's quarter under radial forces +-2 at
+    four points of the equator (1 on each plane's point). Reference: radial displacement at the
+    loads, 0.094."""
+    return hemisphere(directory, scale, force=load_scale, title="MacNeal-Harder pinched hemisphere", increments=1)
+
+
+def pinched_cylinder(directory, scale, load_scale):
+    """Pinched cylinder with rigid end diaphragms: R 300, L 600, t 3, E 3e6, nu 0.3, two
+    opposite radial forces 1 at midspan; one eighth (x from a diaphragm to midspan, a quarter
+    of the circumference), force 1/4, 16 x 16 at scale 1. Reference: radial displacement under
+    the force, 1.8248e-5."""
+    n = 16 * scale
+    nodes, quads, node = grid(n, n, lambda a, b: (300.0 * a, 300.0 * math.sin(0.5 * math.pi * b),
+                                                  300.0 * math.cos(0.5 * math.pi * b)))
+    write_msh(os.path.join(directory, "mesh.msh"), nodes, quads, {
+        "diaphragm": (1, edge(node, [(0, j) for j in range(n + 1)])),
+        "midspan": (1, edge(node, [(n, j) for j in range(n + 1)])),
+        "y0": (1, edge(node, [(i, 0) for i in range(n + 1)])),
+        "z0": (1, edge(node, [(i, n) for i in range(n + 1)])),
+        "load": (0, [node(n, 0)])})
+    return deck("MacNeal-Harder pinched cylinder", 3e6, 0.3, 3.0, f"""
+  supports:
+    diaphragm: {{set: diaphragm, dofs: [uy, uz]}}
+    symmetryX: {{set: midspan, dofs: [ux, ry, rz]}}
+    symmetryY: {{set: y0, dofs: [uy, rx, rz]}}
+    symmetryZ: {{set: z0, dofs: [uz, rx, ry]}}
+  loads:
+    pinch: {{type: point-force, set: load, vector: [0.0, 0.0, {-0.25 * load_scale}]}}""", 1, 300.0 / n)
+
+
+def twisted_beam(direction):
+    def case(directory, scale, load_scale):
+        """Twisted beam: L 12, width 1.1, t 0.32, twisted 90 degrees root to tip, E 29e6,
+        nu 0.22, clamped root, unit tip force spread consistently over the tip edge; 12 x 2 at
+        scale 1. Reference tip deflection along the force: 5.424e-3 for a force along the root's
+        normal (z), 1.754e-3 along the root's width (y)."""
+        nx, ny = 12 * scale, 2 * scale
+        nodes, quads, node = grid(nx, ny, lambda a, b: (
+            12.0 * a, 1.1 * (b - 0.5) * math.cos(0.5 * math.pi * a), 1.1 * (b - 0.5) * math.sin(0.5 * math.pi * a)))
+        write_msh(os.path.join(directory, "mesh.msh"), nodes, quads, {
+            "root": (1, edge(node, [(0, j) for j in range(ny + 1)])),
+            "tip": (1, edge(node, [(nx, j) for j in range(ny + 1)]))})
+        traction = [0.0, 0.0, 0.0]
+        traction["xyz".index(direction)] = load_scale / (1.1 * 0.32)  # unit force over the tip section
+        return deck(f"MacNeal-Harder twisted beam, tip force along {direction}", 29e6, 0.22, 0.32, f"""
+  supports:
+    clamp: {{set: root, dofs: [ux, uy, uz, rx, ry, rz]}}
+  loads:
+    tip: {{type: edge-traction, set: tip, vector: {traction}}}""", 1, 1.0 / scale, probes={"tip": (12.0, 0.0, 0.0)})
+    return case
+
+
+def deck(title, young, poisson, thickness, actions, increments, spacing, control="control: load", probes=None):
+    probe_text = "" if not probes else ", probes: {" + ", ".join(
+        f"{name}: [{x:.12g}, {y:.12g}, {z:.12g}]" for name, (x, y, z) in probes.items()) + "}"
     return f"""perishell:
   version: 1
   title: "{title}"
@@ -151,11 +239,20 @@ def deck(title, young, poisson, thickness, actions, increments, spacing, control
   material: {{young-modulus: {young}, poisson-ratio: {poisson}, density: 1.0, thickness: {thickness}}}
   zones: {{default: ccm}}{actions}
   solver: {{type: implicit, increments: {increments}, {control}, preconditioner: PRECONDITIONER}}
-  output: {{directory: out, every: 0, history-every: 1, history: [load-points]}}
+  output: {{directory: out, every: 0, history-every: 1, history: [load-points]{probe_text}}}
 """
 
 
 CASES = {"slit": slit_plate, "hemisphere": hemisphere, "roof": roof}
+# name: (case, history column, sign, reference, load scale); the measured value is
+# sign * column / load scale.
+LINEAR_CASES = {
+    "scordelis-lo": (scordelis_lo, "A-uz", -1.0, 0.3024, 1e-3),
+    "pinched-hemisphere": (pinched_hemisphere, "pull-ux", 1.0, 0.094, 1e-3),
+    "pinched-cylinder": (pinched_cylinder, "pinch-uz", -1.0, 1.8248e-5, 1.0),
+    "twisted-beam-z": (twisted_beam("z"), "tip-uz", 1.0, 5.424e-3, 1e-3),
+    "twisted-beam-y": (twisted_beam("y"), "tip-uy", 1.0, 1.754e-3, 1e-3),
+}
 
 
 def run(app, deck_path, backend, log_path):
@@ -179,6 +276,12 @@ def run(app, deck_path, backend, log_path):
             "error": "" if result.returncode == 0 else text.strip().splitlines()[-1][:160]}
 
 
+def last_history_value(output_directory, column):
+    with open(os.path.join(output_directory, "history.csv")) as f:
+        rows = list(csv.reader(f))
+    return float(rows[-1][rows[0].index(column)])
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--app", required=True)
@@ -193,7 +296,8 @@ def main():
     for case in args.cases.split(","):
         directory = os.path.join(args.out, case)
         os.makedirs(directory, exist_ok=True)
-        template = CASES[case](directory, args.scale)
+        linear = LINEAR_CASES.get(case)
+        template = linear[0](directory, args.scale, linear[4]) if linear else CASES[case](directory, args.scale)
         for preconditioner in args.preconditioners.split(","):
             deck_path = os.path.join(directory, f"{preconditioner}.yaml")
             with open(deck_path, "w") as f:
@@ -201,21 +305,27 @@ def main():
                     "directory: out", f"directory: out-{preconditioner}"))
             runs = [run(args.app, deck_path, args.backend, os.path.join(directory, f"{preconditioner}-{r}.log"))
                     for r in range(args.repeats)]
-            result = dict(runs[-1], seconds=statistics.median(r["seconds"] for r in runs))
+            result = dict(runs[-1], seconds=statistics.median(r["seconds"] for r in runs), value="-", relative="-")
+            if linear and result["status"] == 0:
+                value = linear[2] * last_history_value(os.path.join(directory, f"out-{preconditioner}"),
+                                                       linear[1]) / linear[4]
+                result.update(value=f"{value:.5g}", relative=f"{value / linear[3]:.4f}")
             rows.append((case, preconditioner, result))
             print(f"{case:11s} {preconditioner:9s} {result['seconds']:8.2f} s  exit {result['status']}  "
                   f"increments {result['increments']}  cuts {result['cuts']}  Newton {result['newton']}  "
                   f"Krylov {result['krylov']}  factorizations {result['factorizations']}  "
                   f"AMG builds {result['builds']}  max |u| {result['max_u']}  limit point {result['limit']}"
+                  + (f"  value {result['value']} (ours/reference {result['relative']})" if linear else "")
                   + (f"  ({result['error']})" if result["error"] else ""), flush=True)
     with open(os.path.join(args.out, "shell_benchmarks.md"), "w") as f:
         f.write(f"backend {args.backend}, scale {args.scale}, median of {args.repeats} run(s)\n\n"
                 "| case | preconditioner | exit | wall s | increments | cuts | Newton | Krylov | factorizations |"
-                " AMG builds | max abs u | limit point |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+                " AMG builds | max abs u | limit point | linear value | ours / reference |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
         for case, preconditioner, r in rows:
             f.write(f"| {case} | {preconditioner} | {r['status']} | {r['seconds']:.2f} | {r['increments']} | "
                     f"{r['cuts']} | {r['newton']} | {r['krylov']} | {r['factorizations']} | {r['builds']} | "
-                    f"{r['max_u']} | {r['limit']} |\n")
+                    f"{r['max_u']} | {r['limit']} | {r['value']} | {r['relative']} |\n")
     return 0
 
 

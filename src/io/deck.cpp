@@ -634,10 +634,16 @@ std::vector<deck::Load> readLoads(const Section& section) {
         if (item.has("value")) load.value = item.number("value");
         break;
       case LoadType::Pressure:
-        item.allowOnly({"type", "element-set", "value", "follower", "curve"}, "for type pressure");
+        item.allowOnly({"type", "element-set", "vector", "value", "follower", "curve"}, "for type pressure");
         load.set = item.text("element-set", "");
-        load.value = item.number("value");
+        if (item.has("vector") == item.has("value"))
+          item.fail("", "needs exactly one of value (pressure [Pa] along the element normal) or vector "
+                        "(traction [Pa] in a fixed global direction, e.g. self-weight)");
+        if (item.has("vector")) load.vector = item.vector3("vector");
+        if (item.has("value")) load.value = item.number("value");
         load.follower = item.flag("follower", false);
+        if (load.follower && load.vector)
+          item.fail("follower", "applies to value only: a vector traction keeps its global direction");
         break;
     }
     load.curve = item.text("curve", "");

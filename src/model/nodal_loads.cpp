@@ -87,7 +87,8 @@ void addEdgeTraction(const Model& model, const deck::Load& load, const HostNodal
   }
 }
 
-// F_a = sum over Gauss points of N_a p (g_1 x g_2); the Gauss weights are 1.
+// F_a = sum over Gauss points of N_a p (g_1 x g_2), or N_a |g_1 x g_2| t for a traction vector
+// t; the Gauss weights are 1.
 void addPressure(const Model& model, const deck::Load& load, const HostNodalValues& nodal) {
   const auto& mesh = model.shell.mesh;
   for (const LocalIndex element : pressureElements(model, load)) {
@@ -103,9 +104,12 @@ void addPressure(const Model& model, const deck::Load& load, const HostNodalValu
           g2[d] += point.dShapeDeta[a] * x[a][d];
         }
       const Vector3 areaVector = cross(g1, g2);
+      Vector3 traction{};
+      for (int d = 0; d < 3; ++d)
+        traction[d] = load.vector ? (*load.vector)[d] * norm(areaVector) : *load.value * areaVector[d];
       for (int a = 0; a < 4; ++a) {
         Vector3 force{};
-        for (int d = 0; d < 3; ++d) force[d] = point.shape[a] * *load.value * areaVector[d];
+        for (int d = 0; d < 3; ++d) force[d] = point.shape[a] * traction[d];
         addToNode(nodal, mesh.quads(element, a), 0, force);
       }
     }

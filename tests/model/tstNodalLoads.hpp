@@ -205,6 +205,28 @@ TEST(TEST_CATEGORY, nodal_loads_uniform_pressure_on_a_cylinder_cancels) {
   EXPECT_GT(std::abs(sums.sumOfForceNorms / (1.0e5 * trueArea) - 1.0), 1e-4);
 }
 
+// Self-weight: a traction vector per unit area keeps its global direction on every facet, so
+// on the cylinder, unlike the pressure, it sums to vector x area rather than cancelling.
+TEST(TEST_CATEGORY, nodal_loads_surface_traction_vector_keeps_its_direction) {
+  const auto model = build(
+      "perishell:\n  version: 1\n"
+      "  mesh: {generator: cylinder, radius: 0.05, height: 0.04, spacing: 0.005}\n"
+      "  material: {young-modulus: 72.0e9, poisson-ratio: 0.3, density: 2440.0, thickness: 1.0e-3}\n"
+      "  loads:\n    weight: {type: pressure, vector: [0.0, -24.0, 0.0]}\n"
+      "  solver: {type: explicit, steps: 10}\n");
+  const auto nodal = onlyPattern(perishell::model::buildNodalLoads(model));
+  const Totals sums = totals(nodal);
+  const double facetArea = 63 * 2.0 * 0.05 * std::sin(pi / 63) * 0.04;
+  EXPECT_NEAR(sums.sum[0], 0.0, 1e-14);
+  EXPECT_NEAR(sums.sum[1], -24.0 * facetArea, 1e-12);
+  EXPECT_NEAR(sums.sum[2], 0.0, 1e-14);
+  EXPECT_NEAR(sums.sumOfForceNorms, 24.0 * facetArea, 1e-12);  // every nodal force points along -y
+  for (int node = 0; node < model.shell.mesh.numNodes(); ++node) {
+    EXPECT_EQ(nodal(node, 0), 0.0);
+    EXPECT_EQ(nodal(node, 2), 0.0);
+  }
+}
+
 TEST(TEST_CATEGORY, nodal_loads_point_forces_and_moments_act_on_every_node_of_the_set) {
   const auto model = build(plateDeck(
       "  loads:\n"

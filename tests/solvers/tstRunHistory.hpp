@@ -168,7 +168,7 @@ TEST(TEST_CATEGORY, run_history_probes_report_their_node_in_the_implicit_run) {
   }
   EXPECT_GT(std::abs(row["tip-rx"]), 1e-4);  // the moment turns the corner about every axis
   EXPECT_GT(std::abs(row["tip-ry"]), 1e-4);
-  EXPECT_GT(std::abs(row["tip-rz"]), 1e-4);
+  EXPECT_GT(std::abs(row["tip-rz"]), 1e-5);  // about the normal: the stiffer drilling tie (3.2e-5)
 }
 
 TEST(TEST_CATEGORY, run_history_probes_and_shared_corners_in_the_explicit_run) {

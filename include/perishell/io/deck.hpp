@@ -149,7 +149,8 @@ struct Load {
   LoadType type = LoadType::PointForce;
   std::string set;  // point-force, edge-traction: node / edge set; pressure: element set, empty = all
   // point-force: vector [N]; edge-traction: vector [Pa] (fixed global direction) or value [Pa]
-  // (along the outward in-plane edge normal); pressure: value [Pa] along the element normal.
+  // (along the outward in-plane edge normal); pressure: value [Pa] along the element normal or
+  // vector [Pa] (force per unit reference area in a fixed global direction).
   std::optional<Vector3> vector;
   std::optional<double> value;
   std::optional<Vector3> moment;  // point-force: moment on every node of the set [N m]

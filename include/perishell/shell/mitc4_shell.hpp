@@ -19,10 +19,10 @@
 // use the same order: u v w theta_x theta_y theta_z. Forces are internal resisting forces
 // (equilibrium: f = external load).
 //
-// All functions are written once for host and device on small fixed arrays. Limit: a
-// warped reference element is projected onto its flat frame for K_l (no warping
-// correction: it is as accurate as its flat projection); rigid motions still cost no
-// energy, because d removes them exactly for any element.
+// All functions are written once for host and device on small fixed arrays. A warped
+// reference element (nodes off the flat frame's plane by z_a) gets K_l of its flat
+// projection, tied to the true nodes by rigid links (applyWarpingCorrection below); rigid
+// motions cost no energy for any element, because d removes them exactly.
 #include <perishell/core/dual.hpp>
 #include <perishell/core/rotation.hpp>
 #include <perishell/mesh/bilinear_quad.hpp>
@@ -44,10 +44,14 @@ struct ShellSection {
   // Drilling penalty: energy 1/2 (drillingFactor G t) * integral of (theta_z - omega)^2 dA,
   // omega = 1/2 (dv/dx - du/dy), integrated at the 2x2 Gauss points: at the centre alone
   // the four theta_z would share one constraint and a checkerboard of theta_z would cost
-  // no energy on a regular mesh (a singular tangent). It only has to make theta_z
-  // non-singular without stiffening the membrane: 1e-3 leaves the patch tests exact
-  // (theta_z = omega there) and keeps the drilling stiffness far below the membrane's.
-  double drillingFactor = 1e-3;
+  // no energy on a regular mesh (a singular tangent). Where facets meet at an angle (curved
+  // and twisted shells) it is also what ties one facet's in-plane rotation to its
+  // neighbour's bending: too weak a tie converges to a too flexible shell (the MacNeal-Harder
+  // twisted beam, refined to 48 x 8: 1.32 of the reference at 1e-3, 1.03 at 1e-2, 1.001 at
+  // 0.1), too strong a one stiffens the membrane (pinched hemisphere 16 x 16: 0.987 at 0.1,
+  // 0.962 at 1; Hughes & Brezzi's gamma = G is the factor 1). The patch tests stay exact for
+  // any factor (theta_z = omega there). Measured in docs/verification.md.
+  double drillingFactor = 0.1;
   // Membrane hourglass stiffness coefficient r of the explicit one-point element
   // (shell/one_point_shell.hpp; LS-DYNA's default QM is 0.1). MITC4 has no hourglass modes.
   double hourglassCoefficient = 0.1;
@@ -280,8 +284,124 @@ KOKKOS_INLINE_FUNCTION void shellSectionStiffness(const ShellSection& section,
   D[8][8] = section.drillingFactor * shearModulus * t;
 }
 
+// Rigid-link warping correction (MacNeal, "A simple quadrilateral shell element", Computers
+// & Structures 8 (1978) 175-183; Taylor's flat shell in FEAP does the same): the flat
+// element's node p_a = X_a - z_a e3 moves with the true node a as if joined by a rigid link,
+// u_p = u_a + theta_a x (p_a - X_a): u_p = u_a - z_a theta_y, v_p = v_a + z_a theta_x, so
+// K_l <- W^T K_l W. Without it a flat element takes the membrane motion of the true (warped)
+// node for that of its projection (on the MacNeal-Harder twisted beam, 7.5 degrees of twist
+// per element at 12 x 2, the links change the tip deflection by 0.4 %). W d in place:
+KOKKOS_INLINE_FUNCTION void linkWarpedDofsToFlat(const ShellReference& reference, double d[shellDofCount]) {
+  for (int a = 0; a < 4; ++a) {
+    const double warp = reference.local[a][2];
+    d[6 * a] -= warp * d[6 * a + 4];
+    d[6 * a + 1] += warp * d[6 * a + 3];
+  }
+}
+
+// K_l <- W^T K_l W, the same links applied to the stiffness.
+KOKKOS_INLINE_FUNCTION void applyWarpingCorrection(const ShellReference& reference,
+                                                   double localStiffness[shellDofCount][shellDofCount]) {
+  for (int a = 0; a < 4; ++a) {
+    const double warp = reference.local[a][2];
+    if (warp == 0.0) continue;
+    const int u = 6 * a, v = u + 1, thetaX = u + 3, thetaY = u + 4;
+    // K W: columns theta_x, theta_y gain the u, v columns (which W leaves as they are).
+    for (int r = 0; r < shellDofCount; ++r) {
+      localStiffness[r][thetaY] -= warp * localStiffness[r][u];
+      localStiffness[r][thetaX] += warp * localStiffness[r][v];
+    }
+    // W^T (K W): the same for rows.
+    for (int c = 0; c < shellDofCount; ++c) {
+      localStiffness[thetaY][c] -= warp * localStiffness[u][c];
+      localStiffness[thetaX][c] += warp * localStiffness[v][c];
+    }
+  }
+}
+
+// Enhanced membrane strains, condensed (Simo & Rifai, "A class of mixed assumed strain methods
+// and the method of incompatible modes", IJNME 29 (1990) 1595-1638: EAS4, equivalent to
+// Wilson's incompatible modes u, v += alpha (1 - xi^2), beta (1 - eta^2) with Taylor's
+// correction, QM6): the bilinear membrane alone locks in in-plane bending (a 12 x 2 straight
+// cantilever came out 26 % stiff under an in-plane tip force), and in-plane bending is how
+// curved and twisted shells carry much of their load (MacNeal-Harder pinched cylinder, twisted
+// beam). The four modes' strain, G alpha with G = (j0 / j) J0^-1 dM/dxi, integrates to zero
+// over the element, so constant strain is exact (patch test) and the modes never store the
+// energy of a homogeneous field. K_l <- K_l - K_da K_aa^-1 K_ad over the membrane rows.
+KOKKOS_INLINE_FUNCTION void condenseEnhancedMembrane(const ShellReference& reference, const ShellSection& section,
+                                                     double localStiffness[shellDofCount][shellDofCount]) {
+  using mesh::bilinear::nodeEta;
+  using mesh::bilinear::nodeXi;
+  const auto& x = reference.local;
+  double centreJacobian[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
+  for (int a = 0; a < 4; ++a)
+    for (int k = 0; k < 2; ++k) {
+      centreJacobian[0][k] += 0.25 * nodeXi(a) * x[a][k];
+      centreJacobian[1][k] += 0.25 * nodeEta(a) * x[a][k];
+    }
+  const double centreDeterminant =
+      centreJacobian[0][0] * centreJacobian[1][1] - centreJacobian[0][1] * centreJacobian[1][0];
+  const double centreInverse[2][2] = {{centreJacobian[1][1] / centreDeterminant, -centreJacobian[0][1] / centreDeterminant},
+                                      {-centreJacobian[1][0] / centreDeterminant, centreJacobian[0][0] / centreDeterminant}};
+  double D[shellStrainCount][shellStrainCount];
+  shellSectionStiffness(section, D);
+  double modes[4][4] = {}, coupling[4][shellDofCount] = {};  // K_aa, K_ad
+  for (int q = 0; q < mesh::bilinear::numGaussPoints; ++q) {
+    const double xi = mesh::bilinear::gaussXi(q), eta = mesh::bilinear::gaussEta(q);
+    double B[shellStrainCount][shellDofCount];
+    const double weight = shellStrainDisplacement(reference, xi, eta, B);
+    // d/dx, d/dy of (1 - xi^2) and (1 - eta^2) through the centre's Jacobian, times j0 / j.
+    const double dModeDxi[2] = {-2.0 * xi, 0.0}, dModeDeta[2] = {0.0, -2.0 * eta};
+    double G[3][4] = {};  // eps_xx, eps_yy, gamma_xy per mode (u: 0, 1; v: 2, 3)
+    for (int m = 0; m < 2; ++m) {
+      const double dx = centreDeterminant / weight * (centreInverse[0][0] * dModeDxi[m] + centreInverse[0][1] * dModeDeta[m]);
+      const double dy = centreDeterminant / weight * (centreInverse[1][0] * dModeDxi[m] + centreInverse[1][1] * dModeDeta[m]);
+      G[0][m] = dx;
+      G[2][m] = dy;
+      G[1][2 + m] = dy;
+      G[2][2 + m] = dx;
+    }
+    for (int m = 0; m < 4; ++m) {
+      double stress[3];  // D_m G e_m, times the Gauss weight
+      for (int s = 0; s < 3; ++s) {
+        double sum = 0.0;
+        for (int k = 0; k < 3; ++k) sum += D[s][k] * G[k][m];
+        stress[s] = weight * sum;
+      }
+      for (int n = 0; n < 4; ++n) modes[m][n] += G[0][n] * stress[0] + G[1][n] * stress[1] + G[2][n] * stress[2];
+      for (int c = 0; c < shellDofCount; ++c) coupling[m][c] += B[0][c] * stress[0] + B[1][c] * stress[1] + B[2][c] * stress[2];
+    }
+  }
+  // K_aa^-1 K_ad by Cholesky of the 4 x 4 K_aa (positive definite for any valid element).
+  double lower[4][4] = {};
+  for (int j = 0; j < 4; ++j) {
+    double diagonal = modes[j][j];
+    for (int k = 0; k < j; ++k) diagonal -= lower[j][k] * lower[j][k];
+    lower[j][j] = math::sqrt(diagonal);
+    for (int i = j + 1; i < 4; ++i) {
+      double sum = modes[i][j];
+      for (int k = 0; k < j; ++k) sum -= lower[i][k] * lower[j][k];
+      lower[i][j] = sum / lower[j][j];
+    }
+  }
+  double solved[4][shellDofCount];  // L^-1 K_ad: K_da K_aa^-1 K_ad = solved^T solved
+  for (int c = 0; c < shellDofCount; ++c)
+    for (int i = 0; i < 4; ++i) {
+      double sum = coupling[i][c];
+      for (int k = 0; k < i; ++k) sum -= lower[i][k] * solved[k][c];
+      solved[i][c] = sum / lower[i][i];
+    }
+  for (int r = 0; r < shellDofCount; ++r)
+    for (int c = 0; c < shellDofCount; ++c)
+      localStiffness[r][c] -= solved[0][r] * solved[0][c] + solved[1][r] * solved[1][c] + solved[2][r] * solved[2][c] +
+                              solved[3][r] * solved[3][c];
+}
+
 // Linear stiffness K_l (24x24) in the element's flat reference frame, 2x2 Gauss for every
-// term. Depends on the reference geometry only: the caller may cache it per element.
+// term, with the enhanced membrane where the element is wholly CCM and the warping
+// correction. Depends on the reference geometry only: the caller may cache it per element.
+// The enhanced membrane is left out where the coupling scales the membrane point by point
+// (a transition element): with unequal scales its modes would see a homogeneous field.
 // membraneBendingScale[q] multiplies the membrane and bending blocks of D at Gauss point q
 // (mesh::bilinear order): the hybrid D_Hb of the PD-CCM coupling (model.md §4, paper eq.
 // 22-23; coupling/morphing.hpp). Transverse shear and drilling keep their full stiffness:
@@ -315,6 +435,10 @@ KOKKOS_INLINE_FUNCTION void shellLocalStiffness(const double referencePositions[
   }
   for (int c = 0; c < shellDofCount; ++c)
     for (int r = c + 1; r < shellDofCount; ++r) localStiffness[r][c] = localStiffness[c][r];
+  bool wholeMembrane = true;
+  for (int q = 0; q < mesh::bilinear::numGaussPoints; ++q) wholeMembrane = wholeMembrane && membraneBendingScale[q] == 1.0;
+  if (wholeMembrane) condenseEnhancedMembrane(reference, section, localStiffness);
+  applyWarpingCorrection(reference, localStiffness);
 }
 
 KOKKOS_INLINE_FUNCTION void shellLocalStiffness(const double referencePositions[4][3], const ShellSection& section,
