@@ -254,6 +254,35 @@ void checkMaterialScales(const Model& model) {
     }
 }
 
+// A load so small or so large that the nodal forces it makes (its value times dx^2 for a
+// pressure, dx t for an edge traction, itself for a point force) leave the range the solvers
+// carry would show only as a symptom: a zero or non-finite answer. Zero loads are fine (a
+// zero point force is a probe).
+void checkLoadScales(const Model& model) {
+  constexpr double smallest = 1e-100, largest = 1e100;
+  const double dx = model.gridSpacing(), t = model.deck.material.thickness;
+  for (const auto& load : model.deck.loads) {
+    const double area = load.type == deck::LoadType::Pressure       ? dx * dx
+                        : load.type == deck::LoadType::EdgeTraction ? dx * t
+                                                                     : 1.0;
+    const char* unit = load.type == deck::LoadType::PointForce ? "N" : "Pa";
+    auto check = [&](const char* key, double magnitude, const char* magnitudeUnit, double nodalScale) {
+      if (magnitude == 0.0) return;
+      const double nodal = magnitude * nodalScale;
+      if (magnitude >= smallest && magnitude <= largest && nodal >= smallest && nodal <= largest) return;
+      std::ostringstream reason;
+      reason << "has magnitude " << magnitude << " " << magnitudeUnit << ", which makes nodal forces of about "
+             << nodal << (key[0] == 'm' ? " N m" : " N") << ", outside what the solvers can carry in double precision ("
+             << smallest << " to " << largest << " in SI units); check the value and its units";
+      fail(model.deck, "loads." + load.name + "." + key, reason.str());
+    };
+    const auto norm = [](const deck::Vector3& v) { return std::hypot(v[0], v[1], v[2]); };  // no overflow of the squares
+    if (load.value) check("value", std::abs(*load.value), unit, area);
+    if (load.vector) check("vector", norm(*load.vector), unit, area);
+    if (load.moment) check("moment", norm(*load.moment), "N m", 1.0);
+  }
+}
+
 // A pre-crack cuts through the thickness along its normal (mesh/crack_segment.hpp); a normal
 // in the shell's plane makes the cut the shell's own surface, which separates no bond. The
 // shell normal is taken at the mesh node nearest the crack's midpoint.
@@ -373,6 +402,7 @@ Model buildModel(const Deck& deck) {
   for (LocalIndex node = 0; node < mesh.numNodes(); ++node)
     if (isPdNode[node]) model.pdNodes(next++) = node;
   checkMaterialScales(model);
+  checkLoadScales(model);
   checkPreCracksInPd(model);
   checkPreCrackNormals(model);
   return model;

@@ -169,6 +169,28 @@ TEST(TEST_CATEGORY, model_material_values_whose_products_overflow_or_underflow_a
   EXPECT_EQ(withMaterial("thickness: 1.0e-3", "thickness: 1.0e-9"), "no error");
 }
 
+// Loads likewise: the nodal forces a load makes must be ordinary doubles; a zero load (a probe)
+// is fine.
+TEST(TEST_CATEGORY, model_loads_whose_nodal_forces_overflow_or_underflow_are_refused) {
+  const auto withLoad = [](const std::string& load) {
+    return deckErrorKey(plateDeck("    default: pd\n", "", "  loads:\n    " + load + "\n"));
+  };
+  const std::string tiny = withLoad("q: {type: pressure, value: 1.0e-95}");
+  EXPECT_EQ(tiny.rfind("loads.q.value: has magnitude 1e-95 Pa, which makes nodal forces of about 1e-101 N, outside "
+                       "what the solvers can carry in double precision (1e-100 to 1e+100 in SI units)",
+                       0),
+            0u)
+      << tiny;
+  const std::string huge = withLoad("pull: {type: edge-traction, set: right, vector: [1.0e200, 0.0, 0.0]}");
+  EXPECT_EQ(huge.rfind("loads.pull.vector: has magnitude 1e+200 Pa", 0), 0u) << huge;
+  const std::string twist = withLoad("turn: {type: point-force, set: right, moment: [0.0, 0.0, 1.0e120]}");
+  EXPECT_EQ(twist.rfind("loads.turn.moment: has magnitude 1e+120 N m, which makes nodal forces of about 1e+120 N m", 0),
+            0u)
+      << twist;
+  EXPECT_EQ(withLoad("probe: {type: point-force, set: right, vector: [0.0, 0.0, 0.0]}"), "no error");
+  EXPECT_EQ(withLoad("q: {type: pressure, value: 1.0e-60}"), "no error");
+}
+
 TEST(TEST_CATEGORY, model_deck_node_sets_and_unknown_sets) {
   const std::string flank = "    node-sets:\n      flank: {box: {min: [0.0095, 0.0, -1], max: [0.0105, 0.0025, 1]}}\n";
   const auto model = build(plateDeck("    default: pd\n", flank,
