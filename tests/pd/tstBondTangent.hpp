@@ -95,10 +95,11 @@ Matrix12 tangentOnDevice(const MicrobeamEnd ends[2]) {
   hostEnds(1) = ends[1];
   Kokkos::deep_copy(deviceEnds, hostEnds);
   Kokkos::View<double[12][12], Kokkos::LayoutRight, TEST_MEMSPACE> deviceTangent("tangent");
+  const perishell::pd::Micromoduli bondModuli = moduli;  // a copy the lambda captures (no global on the device)
   Kokkos::parallel_for(
       "bond tangent on the device", Kokkos::RangePolicy<TEST_EXECSPACE>(0, 1), KOKKOS_LAMBDA(const int) {
         double K[12][12];
-        perishell::pd::microbeamTangent(moduli, deviceEnds(0), deviceEnds(1), referenceLength,
+        perishell::pd::microbeamTangent(bondModuli, deviceEnds(0), deviceEnds(1), referenceLength,
                                         TangentForm::Symmetric, K);
         for (int r = 0; r < 12; ++r)
           for (int s = 0; s < 12; ++s) deviceTangent(r, s) = K[r][s];
