@@ -203,7 +203,7 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   const char* initialPreconditioner = preconditionerName(solver.activePreconditioner());
   log << "implicit: linear solver: " << initialPreconditioner << " preconditioned "
       << (solver.tangentForm() == TangentForm::Exact ? "GMRES (exact tangent)" : "CG") << "\n";
-  bool limitPointReported = false, snapReported = false;
+  bool limitPointReported = false, snapReported = false, roundOffReported = false;
   ImplicitRunSummary summary;
   PhaseSeconds phases;
   int taken = 0;
@@ -230,6 +230,14 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
                           formatNumber(solver.loadFactor()) + ") is in " + output.xdmfPath());
     }
     for (const auto& note : report.notes) log << "implicit: increment " << increment << ": " << note << "\n";
+    if (report.convergedAtRoundOff && !roundOffReported) {
+      log << "implicit: note: increment " << increment << " stopped at the round-off floor of the internal forces "
+          << "(relative residual " << formatNumber(report.relativeResidual, 3) << ", above solver.tolerance): the "
+          << "load is small against the model's stiffness times its size, and Newton had stopped moving; the "
+          << "displacements are as accurate as double precision allows (a larger load reaches the tolerance, and "
+          << "a linear response scales back).\n";
+      roundOffReported = true;
+    }
     if (report.negativePivots > 0 && !limitPointReported) {
       log << "implicit: warning: increment " << increment << ": the tangent has " << report.negativePivots
           << " negative pivot(s) at load factor " << formatNumber(solver.loadFactor(), 6)

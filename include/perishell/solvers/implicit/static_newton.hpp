@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -54,7 +55,12 @@ struct NewtonOptions {
   // translation is <= tolerance * the increment's largest translation while |r_free| <=
   // sqrt(tolerance) * max(|P|, |reactions|): Newton has then stopped moving, and what is left
   // of r is the round-off of the internal forces (sums of large element and bond forces that
-  // cancel), which at small load levels can exceed tolerance * |P|.
+  // cancel), which at small load levels can exceed tolerance * |P|. At the smallest loads even
+  // sqrt(tolerance) is out of reach: the forces come from coordinates whose last bits carry
+  // the displacement (x = X + u, total form), so their round-off floor is about
+  // eps |K| |X| per DOF (roundOffFloor), whatever the load. Newton stops there too when its
+  // last correction was below sqrt(tolerance) of the increment (convergedAtRoundOff): a 1 m
+  // clamped plate 1 mm thick under 1e-3 Pa stalled at a relative residual of 2e-2 before.
   double tolerance = 1e-8;
   // Bisections of one increment in all before giving up: the halvings after a failed sub-step
   // and those after a hard one (below) together, so that a load no step converges easily under
@@ -143,6 +149,9 @@ struct IncrementReport {
   double relativeResidual = 0.0;
   // Whether the last increment converged on the displacement increment rather than the residual.
   bool convergedOnDisplacement = false;
+  // Whether it stopped at the round-off floor of the internal forces instead (NewtonOptions::
+  // tolerance): the residual could not fall below that floor, and Newton had stopped moving.
+  bool convergedAtRoundOff = false;
   PhaseSeconds seconds;
 };
 
@@ -242,6 +251,9 @@ class StaticNewtonSolver {
   // Largest |translation| of the last correction du, or of the increment (u minus the state
   // saved at its start).
   double largestTranslation(bool ofIncrement) const;
+  // The round-off floor of the out-of-balance force: the 2-norm over rows of eps sum_j |K_ij| s_j,
+  // s_j the model's size for a translation column and 1 for a rotation (NewtonOptions::tolerance).
+  double roundOffFloor(const belos::CrsMatrix<ExecutionSpaceT>& K) const;
 
   // r = P(s) - F_int; returns |r| over free DOF and max(|P(s)|, |r| over prescribed DOF).
   ResidualNorms computeOutOfBalance(double loadFactor);
@@ -367,6 +379,7 @@ class StaticNewtonSolver {
   bool indefiniteNoted_ = false;  // the switch to L D L^T is noted once per run
   bool multigridReusable_ = false;
   int iterationsAfterRebuild_ = 0;
+  double modelSize_ = 0.0;  // the bounding-box diagonal of the reference nodes [m]
   double loadFactor_ = 0.0;
   double preferredStep_ = 0.0;  // the next sub-step's size (advanceTo), 0 before the first
   // Arc-length control: the load at factor 1, the tangent direction dt, the last increment's

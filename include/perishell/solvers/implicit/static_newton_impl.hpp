@@ -40,6 +40,19 @@ StaticNewtonSolver<ExecutionSpaceT>::StaticNewtonSolver(const ExecutionSpaceT& s
   values_ = VectorView<Memory>("perishell::newton::tangentValues", pattern_.columns.extent(0));
   markConstrainedDofs();
   freeDofs_ = countFreeDofs();
+  const auto reference = shell_ ? shell_->referencePositions
+                                 : pd_ ? pd_->referencePositions : CoordinateView<Memory>("no nodes", 0);
+  double low[3], high[3];
+  for (int d = 0; d < 3; ++d) {
+    Kokkos::parallel_reduce(
+        "perishell::newton::modelExtent", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, reference.extent(0)),
+        KOKKOS_LAMBDA(const LocalIndex node, double& lowest, double& highest) {
+          lowest = reference(node, d) < lowest ? reference(node, d) : lowest;
+          highest = reference(node, d) > highest ? reference(node, d) : highest;
+        },
+        Kokkos::Min<double>(low[d]), Kokkos::Max<double>(high[d]));
+  }
+  modelSize_ = reference.extent(0) > 0 ? std::hypot(high[0] - low[0], high[1] - low[1], high[2] - low[2]) : 0.0;
   active_ = options_.preconditioner;
   if (active_ == deck::Preconditioner::Auto)
     active_ = freeDofs_ <= options_.autoCholeskyDofs ? deck::Preconditioner::Cholesky : deck::Preconditioner::Amg;
@@ -192,7 +205,7 @@ IncrementReport StaticNewtonSolver<ExecutionSpaceT>::advanceByArcLength(double s
 template <class ExecutionSpaceT>
 std::string StaticNewtonSolver<ExecutionSpaceT>::iterate(double target, IncrementReport& report) {
   applyPrescribedValues(target);
-  double initialResidual = 0.0, lastCorrection = 0.0;
+  double initialResidual = 0.0, lastCorrection = 0.0, floor = 0.0;
   using Clock = std::chrono::steady_clock;
   std::optional<ResidualNorms> evaluated;  // r after the last update (and line search)
   for (int iteration = 0;; ++iteration) {
@@ -204,11 +217,18 @@ std::string StaticNewtonSolver<ExecutionSpaceT>::iterate(double target, Incremen
     const double reference = std::max(norms.reference, 1e-300);
     report.relativeResidual = norms.free / reference;
     report.convergedOnDisplacement = false;
+    report.convergedAtRoundOff = false;
     if (norms.free <= options_.tolerance * reference) return "";
-    if (iteration > 0 && lastCorrection <= options_.tolerance * largestTranslation(true) &&
-        norms.free <= std::sqrt(options_.tolerance) * reference) {
-      report.convergedOnDisplacement = true;
-      return "";
+    if (iteration > 0) {
+      const double moved = largestTranslation(true);
+      if (lastCorrection <= options_.tolerance * moved && norms.free <= std::sqrt(options_.tolerance) * reference) {
+        report.convergedOnDisplacement = true;
+        return "";
+      }
+      if (lastCorrection <= std::sqrt(options_.tolerance) * moved && norms.free <= floor) {
+        report.convergedAtRoundOff = true;
+        return "";
+      }
     }
     if (iteration == 0) initialResidual = norms.free;
     if (iteration >= options_.maxIterations)
@@ -224,6 +244,7 @@ std::string StaticNewtonSolver<ExecutionSpaceT>::iterate(double target, Incremen
     // r is the right-hand side in place: the next iteration evaluates it afresh.
     const VectorView<Memory> rhs = flatOutOfBalance();
     const Matrix K = constrainedTangent(rhs, report);
+    floor = roundOffFloor(K);
     const VectorView<Memory> solution = flatCorrection();
     belos::CgResult result;
     std::string linearFailure;
@@ -294,6 +315,25 @@ double StaticNewtonSolver<ExecutionSpaceT>::searchLine(double target, double slo
   }
   ++report.lineSearches;
   return bestEta;
+}
+
+template <class ExecutionSpaceT>
+double StaticNewtonSolver<ExecutionSpaceT>::roundOffFloor(const Matrix& K) const {
+  const auto rowMap = K.graph.row_map;
+  const auto columns = K.graph.entries;
+  const auto values = K.values;
+  const double size = modelSize_;
+  double sumOfSquares = 0.0;
+  Kokkos::parallel_reduce(
+      "perishell::newton::roundOffFloor", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, K.numRows()),
+      KOKKOS_LAMBDA(const LocalIndex row, double& sum) {
+        double magnitude = 0.0;
+        for (auto entry = rowMap(row); entry < rowMap(row + 1); ++entry)
+          magnitude += Kokkos::Experimental::fabs(values(entry)) * (columns(entry) % 6 < 3 ? size : 1.0);
+        sum += magnitude * magnitude;
+      },
+      sumOfSquares);
+  return std::numeric_limits<double>::epsilon() * std::sqrt(sumOfSquares);
 }
 
 template <class ExecutionSpaceT>
