@@ -7,6 +7,27 @@
 
 namespace perishell::solvers {
 
+namespace detail {
+
+// The diagonal of the nodes' bounding box [m] (a free function: CUDA allows no device lambda
+// in a constructor).
+template <class ExecutionSpaceT, class MemorySpaceT>
+double boundingBoxDiagonal(const ExecutionSpaceT& space, const CoordinateView<MemorySpaceT>& positions) {
+  if (positions.extent(0) == 0) return 0.0;
+  double low[3], high[3];
+  for (int d = 0; d < 3; ++d)
+    Kokkos::parallel_reduce(
+        "perishell::newton::modelExtent", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, positions.extent(0)),
+        KOKKOS_LAMBDA(const LocalIndex node, double& lowest, double& highest) {
+          lowest = positions(node, d) < lowest ? positions(node, d) : lowest;
+          highest = positions(node, d) > highest ? positions(node, d) : highest;
+        },
+        Kokkos::Min<double>(low[d]), Kokkos::Max<double>(high[d]));
+  return std::hypot(high[0] - low[0], high[1] - low[1], high[2] - low[2]);
+}
+
+}  // namespace detail
+
 template <class ExecutionSpaceT>
 StaticNewtonSolver<ExecutionSpaceT>::StaticNewtonSolver(const ExecutionSpaceT& space, LocalIndex numNodes,
                                                         std::optional<shell::ShellBody<Memory>> shellBody,
@@ -40,19 +61,9 @@ StaticNewtonSolver<ExecutionSpaceT>::StaticNewtonSolver(const ExecutionSpaceT& s
   values_ = VectorView<Memory>("perishell::newton::tangentValues", pattern_.columns.extent(0));
   markConstrainedDofs();
   freeDofs_ = countFreeDofs();
-  const auto reference = shell_ ? shell_->referencePositions
-                                 : pd_ ? pd_->referencePositions : CoordinateView<Memory>("no nodes", 0);
-  double low[3], high[3];
-  for (int d = 0; d < 3; ++d) {
-    Kokkos::parallel_reduce(
-        "perishell::newton::modelExtent", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, reference.extent(0)),
-        KOKKOS_LAMBDA(const LocalIndex node, double& lowest, double& highest) {
-          lowest = reference(node, d) < lowest ? reference(node, d) : lowest;
-          highest = reference(node, d) > highest ? reference(node, d) : highest;
-        },
-        Kokkos::Min<double>(low[d]), Kokkos::Max<double>(high[d]));
-  }
-  modelSize_ = reference.extent(0) > 0 ? std::hypot(high[0] - low[0], high[1] - low[1], high[2] - low[2]) : 0.0;
+  modelSize_ = detail::boundingBoxDiagonal(space_, shell_ ? shell_->referencePositions
+                                                   : pd_ ? pd_->referencePositions
+                                                         : CoordinateView<Memory>("no nodes", 0));
   active_ = options_.preconditioner;
   if (active_ == deck::Preconditioner::Auto)
     active_ = freeDofs_ <= options_.autoCholeskyDofs ? deck::Preconditioner::Cholesky : deck::Preconditioner::Amg;
