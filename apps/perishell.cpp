@@ -105,6 +105,17 @@ std::string withThousands(long long value) {
   return (value < 0 ? "-" : "") + digits;
 }
 
+// Elements first..last of the mesh by kind: "8 quads", "7 quads and 2 triangles", "200 triangles".
+std::string elementCounts(const perishell::mesh::HostQuadMesh& mesh, perishell::LocalIndex first,
+                          perishell::LocalIndex last) {
+  long long triangles = 0;
+  for (perishell::LocalIndex e = first; e < last; ++e) triangles += perishell::mesh::isTriangle(mesh.quads, e);
+  const long long quads = last - first - triangles;
+  if (triangles == 0) return withThousands(quads) + " quads";
+  if (quads == 0) return withThousands(triangles) + " triangles";
+  return withThousands(quads) + " quads and " + withThousands(triangles) + " triangles";
+}
+
 const char* generatorName(perishell::deck::MeshGenerator generator) {
   switch (generator) {
     case perishell::deck::MeshGenerator::Plate: return "plate";
@@ -176,9 +187,10 @@ void printMeshNotes(const perishell::model::Model& model) {
   if (model.numLayerNodes() > 0) {
     std::string sets;
     for (const auto& [set, nodes] : model.supportLayer.nodesOfSet) sets += (sets.empty() ? "" : ", ") + set;
-    std::printf("  %-10s %s nodes, %s quads held beyond the clamped PD edges of %s (peridynamics.support-layer)\n",
+    std::printf("  %-10s %s nodes, %s held beyond the clamped PD edges of %s (peridynamics.support-layer)\n",
                 "layer", withThousands(model.numLayerNodes()).c_str(),
-                withThousands(model.shell.mesh.numElements() - model.numMeshElements()).c_str(), sets.c_str());
+                elementCounts(model.shell.mesh, model.numMeshElements(), model.shell.mesh.numElements()).c_str(),
+                sets.c_str());
   }
   for (const auto& set : model.supportLayer.skippedSets)
     std::printf("  %-10s no support layer beyond set '%s': the mesh goes on beyond each of its free edges (a slit "
@@ -240,9 +252,9 @@ int runCheck(const std::vector<std::string>& args) {
   const auto& mesh = model.shell.mesh;
   std::printf("perishell %s: check %s\n", perishell::versionString().c_str(), deckPath.c_str());
   if (!deck.title.empty()) std::printf("  %-10s %s\n", "title", deck.title.c_str());
-  std::printf("  %-10s %s, %s nodes, %s quads, spacing %g m\n", "mesh", generatorName(deck.mesh.generator),
-              withThousands(model.numMeshNodes()).c_str(), withThousands(model.numMeshElements()).c_str(),
-              model.gridSpacing());
+  std::printf("  %-10s %s, %s nodes, %s, spacing %g m\n", "mesh", generatorName(deck.mesh.generator),
+              withThousands(model.numMeshNodes()).c_str(),
+              elementCounts(mesh, 0, model.numMeshElements()).c_str(), model.gridSpacing());
   std::printf("  %-10s %s PD elements of %s: PD ratio %.1f %%; %s PD nodes\n", "zones",
               withThousands(model.numPdElements).c_str(), withThousands(model.numMeshElements()).c_str(),
               100.0 * model.pdRatio(), withThousands(model.pdNodes.extent(0) - model.numLayerNodes()).c_str());
@@ -274,8 +286,9 @@ int runDeck(const std::vector<std::string>& args) {
   if (!deck.title.empty()) std::printf("  %-10s %s\n", "title", deck.title.c_str());
   for (const auto& warning : deck.warnings) std::printf("  warning: %s\n", warning.c_str());
   const auto model = perishell::model::buildModel(deck);
-  std::printf("  %-10s %s nodes, %s quads, PD ratio %.1f %%, %s free DOF\n", "model",
-              withThousands(model.numMeshNodes()).c_str(), withThousands(model.numMeshElements()).c_str(),
+  std::printf("  %-10s %s nodes, %s, PD ratio %.1f %%, %s free DOF\n", "model",
+              withThousands(model.numMeshNodes()).c_str(),
+              elementCounts(model.shell.mesh, 0, model.numMeshElements()).c_str(),
               100.0 * model.pdRatio(), withThousands(model.freeDofCount()).c_str());
   printMeshNotes(model);
   std::fflush(stdout);

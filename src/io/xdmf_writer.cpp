@@ -201,11 +201,27 @@ XdmfTimeSeriesWriter::XdmfTimeSeriesWriter(std::string directory, std::string ba
 
   const auto coordinates = contiguous(mesh.coordinates);
   const auto quads = contiguous(mesh.quads);
+  // Triangles (stored a b c c) go out as XDMF triangles, so that viewers see three corners.
+  std::vector<int> mixed;
+  for (LocalIndex element = 0; element < numElements_; ++element)
+    if (mesh::isTriangle(mesh.quads, element)) {
+      mixed.reserve(5 * static_cast<std::size_t>(numElements_));
+      for (LocalIndex e = 0; e < numElements_; ++e) {
+        const int corners = mesh::cornerCount(mesh.quads, e);
+        mixed.push_back(corners == 3 ? 4 : 5);
+        for (int corner = 0; corner < corners; ++corner) mixed.push_back(mesh.quads(e, corner));
+      }
+      mixedTopologyLength_ = mixed.size();
+      break;
+    }
   writeHdf5FileAtomically(meshPath(), [&](hid_t file, const std::string& path) {
     writeDataset(file, "geometry", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {hsize_t(numNodes_), 3},
                  coordinates.data(), path);
-    writeDataset(file, "topology", H5T_NATIVE_INT, H5T_STD_I32LE, {hsize_t(numElements_), 4}, quads.data(),
-                 path);
+    if (mixed.empty())
+      writeDataset(file, "topology", H5T_NATIVE_INT, H5T_STD_I32LE, {hsize_t(numElements_), 4}, quads.data(),
+                   path);
+    else
+      writeDataset(file, "topology", H5T_NATIVE_INT, H5T_STD_I32LE, {hsize_t(mixed.size())}, mixed.data(), path);
   });
 }
 
@@ -310,8 +326,13 @@ std::string XdmfTimeSeriesWriter::xdmfGrid(int step, const StepRecord& record) c
   text += "        <Time Value=\"" + formatDouble(record.time) + "\"/>\n";
   // The mesh's DataItems repeat in every grid (rather than XInclude'd): plain, and the
   // heavy data stay in the one mesh file.
-  text += "        <Topology TopologyType=\"Quadrilateral\" NumberOfElements=\"" + elements + "\">\n";
-  text += dataItem(elements + " 4", "Int", "4", meshFile + ":/topology");
+  if (mixedTopologyLength_ == 0) {
+    text += "        <Topology TopologyType=\"Quadrilateral\" NumberOfElements=\"" + elements + "\">\n";
+    text += dataItem(elements + " 4", "Int", "4", meshFile + ":/topology");
+  } else {
+    text += "        <Topology TopologyType=\"Mixed\" NumberOfElements=\"" + elements + "\">\n";
+    text += dataItem(std::to_string(mixedTopologyLength_), "Int", "4", meshFile + ":/topology");
+  }
   text += "        </Topology>\n";
   text += "        <Geometry GeometryType=\"XYZ\">\n";
   text += dataItem(nodes + " 3", "Float", "8", meshFile + ":/geometry");

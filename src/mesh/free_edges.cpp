@@ -25,8 +25,9 @@ Point3 nodePoint(const HostQuadMesh& mesh, LocalIndex node) {
 
 Point3 elementCentroid(const HostQuadMesh& mesh, LocalIndex element) {
   Point3 centroid{0.0, 0.0, 0.0};
-  for (int a = 0; a < 4; ++a)
-    for (int d = 0; d < 3; ++d) centroid[d] += 0.25 * mesh.coordinates(mesh.quads(element, a), d);
+  const int corners = cornerCount(mesh.quads, element);
+  for (int a = 0; a < corners; ++a)
+    for (int d = 0; d < 3; ++d) centroid[d] += mesh.coordinates(mesh.quads(element, a), d) / corners;
   return centroid;
 }
 
@@ -53,8 +54,8 @@ NodeGrid makeNodeGrid(const HostQuadMesh& mesh, double cell) {
 std::vector<FreeEdge> findFreeEdges(const HostQuadMesh& mesh) {
   std::unordered_map<unsigned long long, std::pair<int, FreeEdge>> edges;
   for (LocalIndex e = 0; e < mesh.numElements(); ++e)
-    for (int k = 0; k < 4; ++k) {
-      const LocalIndex a = mesh.quads(e, k), b = mesh.quads(e, (k + 1) % 4);
+    for (int k = 0, corners = cornerCount(mesh.quads, e); k < corners; ++k) {
+      const LocalIndex a = mesh.quads(e, k), b = mesh.quads(e, (k + 1) % corners);
       const auto key = (static_cast<unsigned long long>(std::min(a, b)) << 32) | unsigned(std::max(a, b));
       auto& entry = edges[key];
       ++entry.first;
@@ -109,7 +110,7 @@ CoordinateView<Kokkos::HostSpace> nodeMaterialDirections(const HostQuadMesh& mes
   std::vector<double> lengths(mesh.numNodes(), 0.0);
   for (LocalIndex e = 0; e < mesh.numElements(); ++e) {
     const Point3 c = centroid(mesh, e);
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < cornerCount(mesh.quads, e); ++k) {
       const LocalIndex n = mesh.quads(e, k);
       const Point3 toCentroid = c - node(mesh, n);
       for (int d = 0; d < 3; ++d) directions(n, d) += toCentroid[d];

@@ -137,29 +137,27 @@ constexpr long long maxCount = 1LL << 31;
 
 enum GmshType : int { lineType = 1, triangleType = 2, quadType = 3, pointType = 15 };
 
-int nodesPerElement(int type) { return type == quadType ? 4 : type == lineType ? 2 : 1; }
-int dimensionOf(int type) { return type == quadType ? 2 : type == lineType ? 1 : 0; }
+int nodesPerElement(int type) { return type == quadType ? 4 : type == triangleType ? 3 : type == lineType ? 2 : 1; }
+int dimensionOf(int type) { return type == quadType || type == triangleType ? 2 : type == lineType ? 1 : 0; }
 
 [[noreturn]] void rejectElementType(Scanner& scanner, int line, long long type) {
   switch (type) {
-    case triangleType:
-      scanner.fail(line, "triangles (element type 2) are not supported: shell elements are 4-node "
-                         "quads only (recombine the surface mesh, Mesh.RecombineAll = 1)");
     case 8: case 9: case 10: case 16:
       scanner.fail(line, "second-order element type " + std::to_string(type) +
                              " is not supported; mesh with Mesh.ElementOrder = 1");
     case 4: case 5: case 6: case 7:
       scanner.fail(line, "volume element type " + std::to_string(type) +
-                             " is not supported: a shell mesh holds quads, lines and points only");
+                             " is not supported: a shell mesh holds quads, triangles, lines and points only");
     default:
       scanner.fail(line, "element type " + std::to_string(type) +
-                             " is not supported (quads 3, lines 1 and points 15 only)");
+                             " is not supported (quads 3, triangles 2, lines 1 and points 15 only)");
   }
 }
 
 struct RawElement {
   long long tag;
-  long long nodeTags[4];
+  long long nodeTags[4];  // a triangle's fourth repeats its third (mesh/quad_mesh.hpp)
+  int corners;            // surface elements: 4 (quad) or 3 (triangle)
   int line;
   int entityTag;
 };
@@ -170,7 +168,7 @@ struct GmshFile {
   std::map<int, std::vector<int>> entityPhysicals[4];  // per dimension: entity tag -> groups
   std::unordered_map<long long, int> nodeOfTag;  // Gmsh node tag -> position in the file
   std::vector<std::array<double, 3>> nodeCoordinates;
-  std::vector<RawElement> elements[3];  // by dimension: points, lines, quads
+  std::vector<RawElement> elements[3];  // by dimension: points, lines, quads and triangles
 };
 
 void readMeshFormat(Scanner& scanner) {
@@ -281,7 +279,8 @@ void readElements(Scanner& scanner, GmshFile& file) {
     const int dimension = static_cast<int>(scanner.integerIn("an element block's entity dimension", 0, 3));
     const int entityTag = scanner.unsignedTag("an element block's entity tag");
     const long long type = scanner.integer("an element type");
-    if (type != quadType && type != lineType && type != pointType) rejectElementType(scanner, blockLine, type);
+    if (type != quadType && type != triangleType && type != lineType && type != pointType)
+      rejectElementType(scanner, blockLine, type);
     if (dimensionOf(static_cast<int>(type)) != dimension)
       scanner.fail(blockLine, "element type " + std::to_string(type) + " in a block of dimension " +
                                   std::to_string(dimension));
@@ -300,13 +299,15 @@ void readElements(Scanner& scanner, GmshFile& file) {
       element.line = scanner.peekLine();
       element.entityTag = entityTag;
       element.tag = scanner.integerIn("an element tag", 1, LLONG_MAX);
-      for (int a = 0; a < nodesPerElement(static_cast<int>(type)); ++a) {
+      element.corners = nodesPerElement(static_cast<int>(type));
+      for (int a = 0; a < element.corners; ++a) {
         element.nodeTags[a] = scanner.integer("an element's node tag");
         if (file.nodeOfTag.count(element.nodeTags[a]) == 0)
           scanner.fail(element.line, "element " + std::to_string(element.tag) +
                                          " refers to unknown node tag " +
                                          std::to_string(element.nodeTags[a]));
       }
+      if (type == triangleType) element.nodeTags[3] = element.nodeTags[2];
       elements.push_back(element);
     }
   }
@@ -332,13 +333,16 @@ struct EdgeUse {
   int localEdge;
 };
 
-// One entry per quad edge, sorted by edge so the quads sharing an edge are adjacent.
+// 3 for a triangle (a b c c), 4 for a quad.
+int cornersOf(const std::array<LocalIndex, 4>& element) { return element[3] == element[2] ? 3 : 4; }
+
+// One entry per element edge, sorted by edge so the elements sharing an edge are adjacent.
 std::vector<EdgeUse> sortedEdgeUses(const std::vector<std::array<LocalIndex, 4>>& quads) {
   std::vector<EdgeUse> uses;
   uses.reserve(4 * quads.size());
   for (std::size_t q = 0; q < quads.size(); ++q)
-    for (int k = 0; k < 4; ++k)
-      uses.push_back({edgeKey(quads[q][k], quads[q][(k + 1) % 4]), static_cast<LocalIndex>(q), k});
+    for (int k = 0, corners = cornersOf(quads[q]); k < corners; ++k)
+      uses.push_back({edgeKey(quads[q][k], quads[q][(k + 1) % corners]), static_cast<LocalIndex>(q), k});
   std::sort(uses.begin(), uses.end(), [](const EdgeUse& a, const EdgeUse& b) {
     return a.key != b.key ? a.key < b.key : a.quad < b.quad;
   });
@@ -346,7 +350,7 @@ std::vector<EdgeUse> sortedEdgeUses(const std::vector<std::array<LocalIndex, 4>>
 }
 
 bool traversesUpward(const std::array<LocalIndex, 4>& quad, int localEdge) {
-  return quad[localEdge] < quad[(localEdge + 1) % 4];
+  return quad[localEdge] < quad[(localEdge + 1) % cornersOf(quad)];
 }
 
 // Flip quads so that two quads sharing an edge traverse it in opposite directions; each
@@ -380,7 +384,7 @@ void orientConsistently(std::vector<std::array<LocalIndex, 4>>& quads, const std
     queue.assign(1, static_cast<LocalIndex>(seed));
     for (std::size_t head = 0; head < queue.size(); ++head) {
       const LocalIndex q = queue[head];
-      for (int k = 0; k < 4; ++k) {
+      for (int k = 0; k < cornersOf(quads[q]); ++k) {
         const LocalIndex other = neighbour[q][k];
         if (other < 0) continue;
         const signed char required = flipped[q] ^ (sameDirection[q][k] ? 1 : 0);
@@ -389,21 +393,29 @@ void orientConsistently(std::vector<std::array<LocalIndex, 4>>& quads, const std
           queue.push_back(other);
         } else if (flipped[other] != required) {
           scanner.fail(rawQuads[other].line,
-                       "quads " + std::to_string(rawQuads[q].tag) + " and " +
+                       "elements " + std::to_string(rawQuads[q].tag) + " and " +
                            std::to_string(rawQuads[other].tag) +
                            " cannot be oriented consistently: the surface is not orientable");
         }
       }
     }
   }
-  for (std::size_t q = 0; q < numQuads; ++q)
-    if (flipped[q]) std::swap(quads[q][1], quads[q][3]);
+  for (std::size_t q = 0; q < numQuads; ++q) {
+    if (!flipped[q]) continue;
+    if (cornersOf(quads[q]) == 3) {
+      std::swap(quads[q][1], quads[q][2]);
+      quads[q][3] = quads[q][2];
+    } else {
+      std::swap(quads[q][1], quads[q][3]);
+    }
+  }
 }
 
 // The edge {a, b} in the direction the (possibly flipped) quad traverses it.
 MeshEdge asTraversed(const std::array<LocalIndex, 4>& quad, LocalIndex a, LocalIndex b) {
-  for (int k = 0; k < 4; ++k)
-    if (quad[k] == b && quad[(k + 1) % 4] == a) return {b, a};
+  const int corners = cornersOf(quad);
+  for (int k = 0; k < corners; ++k)
+    if (quad[k] == b && quad[(k + 1) % corners] == a) return {b, a};
   return {a, b};
 }
 
@@ -420,20 +432,34 @@ const std::vector<int>& physicalsOf(const GmshFile& file, int dimension, int ent
   return found == file.entityPhysicals[dimension].end() ? none : found->second;
 }
 
-// A quad the elements and node weights cannot be built on, named by its tags and line.
+// "quad element 12" or "triangle element 12", as the file's element type says.
+std::string elementName(const RawElement& element) {
+  return std::string(element.corners == 3 ? "triangle" : "quad") + " element " + std::to_string(element.tag);
+}
+
+// An element the shell elements and node weights cannot be built on, named by its tags and line.
 void checkQuadShapeAt(const GmshFile& file, const RawElement& quad, const Scanner& scanner) {
-  std::array<std::array<double, 3>, 4> corners;
-  for (int a = 0; a < 4; ++a) corners[a] = file.nodeCoordinates[file.nodeOfTag.at(quad.nodeTags[a])];
-  const QuadShapeCheck shape = checkQuadShape(corners);
+  QuadShapeCheck shape;
+  if (quad.corners == 3) {
+    std::array<std::array<double, 3>, 3> corners;
+    for (int a = 0; a < 3; ++a) corners[a] = file.nodeCoordinates[file.nodeOfTag.at(quad.nodeTags[a])];
+    shape = checkTriangleShape(corners);
+  } else {
+    std::array<std::array<double, 3>, 4> corners;
+    for (int a = 0; a < 4; ++a) corners[a] = file.nodeCoordinates[file.nodeOfTag.at(quad.nodeTags[a])];
+    shape = checkQuadShape(corners);
+  }
   if (shape.defect == QuadShapeDefect::none) return;
-  std::string name = "quad element " + std::to_string(quad.tag) + " (node tags";
-  for (int a = 0; a < 4; ++a) name += " " + std::to_string(quad.nodeTags[a]);
+  std::string name = elementName(quad) + " (node tags";
+  for (int a = 0; a < quad.corners; ++a) name += " " + std::to_string(quad.nodeTags[a]);
   name += ")";
   const auto tag = [&quad](int corner) { return std::to_string(quad.nodeTags[corner]); };
   switch (shape.defect) {
     case QuadShapeDefect::coincidentCorners:
       scanner.fail(quad.line, name + ": nodes " + tag(shape.corner) + " and " + tag(shape.otherCorner) +
-                                  " are at the same point; a quad needs four distinct corners");
+                                  " are at the same point; " +
+                                  (quad.corners == 3 ? "a triangle needs three" : "a quad needs four") +
+                                  " distinct corners");
     case QuadShapeDefect::zeroArea:
       scanner.fail(quad.line, name + " has zero area: its nodes lie on one line");
     case QuadShapeDefect::selfCrossing:
@@ -449,9 +475,10 @@ void checkQuadShapeAt(const GmshFile& file, const RawElement& quad, const Scanne
 
 ShellMesh buildShellMesh(const GmshFile& file, const Scanner& scanner) {
   const auto& rawQuads = file.elements[2];
-  if (rawQuads.empty()) scanner.fail(scanner.lastTokenLine(), "the file holds no quads (element type 3)");
+  if (rawQuads.empty())
+    scanner.fail(scanner.lastTokenLine(), "the file holds no surface elements (quads, type 3, or triangles, type 2)");
 
-  // Keep the nodes of quads, numbered in file order.
+  // Keep the nodes of quads and triangles, numbered in file order.
   std::vector<LocalIndex> indexOfFileNode(file.nodeCoordinates.size(), -1);
   for (const auto& quad : rawQuads)
     for (int a = 0; a < 4; ++a) indexOfFileNode[file.nodeOfTag.at(quad.nodeTags[a])] = 0;
@@ -463,18 +490,19 @@ ShellMesh buildShellMesh(const GmshFile& file, const Scanner& scanner) {
     if (index < 0)
       scanner.fail(element.line, std::string(kind) + " element " + std::to_string(element.tag) +
                                      ": node tag " + std::to_string(element.nodeTags[a]) +
-                                     " is not a node of any quad");
+                                     " is not a node of any quad or triangle");
     return index;
   };
 
   std::vector<std::array<LocalIndex, 4>> quads(rawQuads.size());
   for (std::size_t q = 0; q < rawQuads.size(); ++q) {
-    for (int a = 0; a < 4; ++a) quads[q][a] = quadNode(rawQuads[q], a, "quad");
-    for (int a = 0; a < 4; ++a)
-      for (int b = a + 1; b < 4; ++b)
+    const char* kind = rawQuads[q].corners == 3 ? "triangle" : "quad";
+    for (int a = 0; a < 4; ++a) quads[q][a] = quadNode(rawQuads[q], a, kind);
+    for (int a = 0; a < rawQuads[q].corners; ++a)
+      for (int b = a + 1; b < rawQuads[q].corners; ++b)
         if (quads[q][a] == quads[q][b])
-          scanner.fail(rawQuads[q].line, "quad element " + std::to_string(rawQuads[q].tag) +
-                                             " repeats node tag " + std::to_string(rawQuads[q].nodeTags[a]));
+          scanner.fail(rawQuads[q].line, elementName(rawQuads[q]) + " repeats node tag " +
+                                             std::to_string(rawQuads[q].nodeTags[a]));
     checkQuadShapeAt(file, rawQuads[q], scanner);
   }
   const auto uses = sortedEdgeUses(quads);
@@ -502,7 +530,7 @@ ShellMesh buildShellMesh(const GmshFile& file, const Scanner& scanner) {
     if (found == uses.end() || found->key != key)
       scanner.fail(line.line, "line element " + std::to_string(line.tag) + " (node tags " +
                                   std::to_string(line.nodeTags[0]) + " " + std::to_string(line.nodeTags[1]) +
-                                  ") is not an edge of any quad");
+                                  ") is not an edge of any quad or triangle");
     const MeshEdge edge = asTraversed(quads[found->quad], ends[0], ends[1]);
     for (int physical : physicals) {
       const std::string name = groupName(file, 1, physical);

@@ -55,4 +55,16 @@ QuadShapeCheck checkQuadShape(const std::array<std::array<double, 3>, 4>& corner
   return {};
 }
 
+QuadShapeCheck checkTriangleShape(const std::array<std::array<double, 3>, 3>& corners) {
+  double longestEdge = 0.0;
+  for (int a = 0; a < 3; ++a) longestEdge = std::max(longestEdge, length(difference(corners[(a + 1) % 3], corners[a])));
+  for (int a = 0; a < 3; ++a)
+    for (int b = a + 1; b < 3; ++b)
+      if (!(length(difference(corners[b], corners[a])) > 1e-9 * longestEdge))
+        return {QuadShapeDefect::coincidentCorners, a, b};
+  const double twiceArea = length(cross(difference(corners[1], corners[0]), difference(corners[2], corners[0])));
+  if (!(twiceArea > 1e-8 * longestEdge * longestEdge)) return {QuadShapeDefect::zeroArea};
+  return {};
+}
+
 }  // namespace perishell::mesh

@@ -42,8 +42,9 @@ class LayerBuilder {
     for (LocalIndex e = 0; e < mesh.numElements(); ++e) {
       double diameter = 0.0;
       for (int k = 0; k < 4; ++k)
-        diameter = std::max(diameter, std::sqrt(dot(node(mesh.quads(e, k)) - node(mesh.quads(e, (k + 2) % 4)),
-                                                     node(mesh.quads(e, k)) - node(mesh.quads(e, (k + 2) % 4)))));
+        for (int l = k + 1; l < 4; ++l)
+          diameter = std::max(diameter, std::sqrt(dot(node(mesh.quads(e, k)) - node(mesh.quads(e, l)),
+                                                       node(mesh.quads(e, k)) - node(mesh.quads(e, l)))));
       largestDiameter_ = std::max(largestDiameter_, diameter);
       if (mayMirror[e]) centroidGrid_.insert(centroid(e), e);
     }
@@ -113,16 +114,20 @@ class LayerBuilder {
         for (const int set : sets) result[set].nodes.push_back(found);
       return found;
     };
-    // The image of an element under `mirrors` reflections: after an odd number its nodes
-    // are taken in reverse, so that its normal keeps the original's side.
+    // The image of an element under `mirrors` reflections: after an odd number its corners
+    // are taken in reverse, so that its normal keeps the original's side. A triangle's image
+    // is a triangle (a b c c, mesh/quad_mesh.hpp).
     const auto addImage = [&](LocalIndex element, std::initializer_list<int> sets, int mirrors, auto&& map) {
+      const int corners = cornerCount(mesh_.quads, element);
       std::array<LocalIndex, 4> image;
-      for (int k = 0; k < 4; ++k)
-        image[k] = imageNode(map(node(mesh_.quads(element, mirrors % 2 == 1 ? 3 - k : k))), sets);
+      for (int k = 0; k < corners; ++k)
+        image[k] = imageNode(map(node(mesh_.quads(element, mirrors % 2 == 1 ? corners - 1 - k : k))), sets);
+      if (corners == 3) image[3] = image[2];
       std::array<LocalIndex, 4> key = image;
-      std::sort(key.begin(), key.end());
-      if (std::adjacent_find(key.begin(), key.end()) != key.end()) return;  // degenerate image
-      if (key[3] < firstNode_) return;  // all on the mesh's own nodes: no layer element
+      std::sort(key.begin(), key.begin() + corners);
+      if (std::adjacent_find(key.begin(), key.begin() + corners) != key.begin() + corners) return;  // degenerate image
+      if (corners == 3) key[3] = -1;
+      if (*std::max_element(key.begin(), key.end()) < firstNode_) return;  // all on the mesh's own nodes
       if (elementKeys_.insert(key).second) quads_.push_back(image);
     };
 

@@ -11,6 +11,7 @@
 #include <perishell/solvers/explicit/central_difference.hpp>
 #include <solvers/pushed_edge.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -33,18 +34,36 @@ struct MixedPlate {
   perishell::coupling::CouplingInputs inputs;
 };
 
-// cellsX x cellsY elements of 1 mm; PD elements: none, a disc of radius 4 mm at the centre,
-// or a band 6 mm wide across x at the middle. delta = 3 dx, transition 2 delta, cubic.
-MixedPlate makeMixedPlate(int cellsX, int cellsY, double poissonRatio, Zone zone, Element kind) {
+// Each quad a b c d cut into two triangles (a b c c and a c d d, or across the other diagonal
+// in every other cell); the plate's node and edge sets stay valid.
+void cutIntoTriangles(perishell::mesh::HostQuadMesh& mesh) {
+  const LocalIndex numQuads = mesh.numElements();
+  perishell::QuadConnectivityView<Kokkos::HostSpace> triangles("triangles", 2 * numQuads);
+  for (LocalIndex e = 0; e < numQuads; ++e) {
+    const LocalIndex a = mesh.quads(e, 0), b = mesh.quads(e, 1), c = mesh.quads(e, 2), d = mesh.quads(e, 3);
+    const LocalIndex cut[2][3] = {{a, b, e % 2 ? d : c}, {e % 2 ? b : a, c, d}};
+    for (int t = 0; t < 2; ++t)
+      for (int k = 0; k < 4; ++k) triangles(2 * e + t, k) = cut[t][k < 3 ? k : 2];
+  }
+  mesh.quads = triangles;
+}
+
+// cellsX x cellsY cells of 1 mm (quads, or with `triangles` two triangles each); PD
+// elements: none, a disc of radius 4 mm at the centre, or a band 6 mm wide across x at the
+// middle. delta = 3 dx, transition 2 delta, cubic.
+MixedPlate makeMixedPlate(int cellsX, int cellsY, double poissonRatio, Zone zone, Element kind,
+                          bool triangles = false) {
   MixedPlate plate;
   plate.shell = perishell::mesh::makePlate(cellsX * spacing, cellsY * spacing, spacing);
+  if (triangles) cutIntoTriangles(plate.shell.mesh);
   const auto& mesh = plate.shell.mesh;
   plate.elementIsPd = Kokkos::View<std::uint8_t*, Kokkos::HostSpace>("is pd", mesh.numElements());
   const double centreX = 0.5 * cellsX * spacing, centreY = 0.5 * cellsY * spacing;
   for (LocalIndex e = 0; e < mesh.numElements(); ++e) {
     double c[2] = {0.0, 0.0};
-    for (int a = 0; a < 4; ++a)
-      for (int d = 0; d < 2; ++d) c[d] += 0.25 * mesh.coordinates(mesh.quads(e, a), d);
+    const int corners = perishell::mesh::cornerCount(mesh.quads, e);
+    for (int a = 0; a < corners; ++a)
+      for (int d = 0; d < 2; ++d) c[d] += mesh.coordinates(mesh.quads(e, a), d) / corners;
     switch (zone) {
       case Zone::None: plate.elementIsPd(e) = 0; break;
       case Zone::Disc: plate.elementIsPd(e) = std::hypot(c[0] - centreX, c[1] - centreY) < 4.0 * spacing; break;
@@ -113,6 +132,38 @@ VibrationEnergies vibrationEnergies(Solver<TEST_EXECSPACE>& solver, long long st
       result.largestHourglass = std::max(result.largestHourglass, report.hourglass / report.strain);
   }
   return result;
+}
+
+// The speeds of a plane wave pushed into the 200 x 10 mm strip's left edge, timed between
+// stations on the centre line at 40 and 80 mm (CCM) and at 80 and 120 mm (across the band).
+struct WaveSpeeds {
+  double ccm, acrossBand;
+};
+
+WaveSpeeds planeWaveSpeeds(const MixedPlate& plate, double expectedSpeed) {
+  const auto& mesh = plate.shell.mesh;
+  const double pushSpeed = 0.1, rampTime = 1.0;
+  auto solver = makeSolver<TEST_EXECSPACE>(plate, pushedEdgeActions<TEST_MEMSPACE>(mesh, 0.5 * spacing, pushSpeed, rampTime));
+  EXPECT_GT(solver.body().bonds.numBonds(), 0u);
+  const double stations[3] = {40e-3, 80e-3, 120e-3};
+  LocalIndex probe[3] = {0, 0, 0};
+  for (LocalIndex node = 0; node < mesh.numNodes(); ++node)
+    for (int s = 0; s < 3; ++s)
+      if (std::abs(mesh.coordinates(node, 0) - stations[s]) < 1e-9 && std::abs(mesh.coordinates(node, 1) - 5e-3) < 1e-9)
+        probe[s] = node;
+  double arrival[3] = {0.0, 0.0, 0.0}, previous[3] = {0.0, 0.0, 0.0};
+  while (solver.time() < 1.3 * stations[2] / expectedSpeed && arrival[2] == 0.0) {
+    solver.step();
+    const auto velocities = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.velocities());
+    for (int s = 0; s < 3; ++s) {
+      const double v = velocities(probe[s], 0);
+      if (arrival[s] == 0.0 && v >= 0.5 * pushSpeed)
+        arrival[s] = solver.time() - 0.5 * solver.timeStep() - solver.timeStep() * (v - 0.5 * pushSpeed) / (v - previous[s]);
+      previous[s] = v;
+    }
+  }
+  for (int s = 0; s < 3; ++s) EXPECT_GT(arrival[s], 0.0) << "station " << s;
+  return {(stations[1] - stations[0]) / (arrival[1] - arrival[0]), (stations[2] - stations[1]) / (arrival[2] - arrival[1])};
 }
 
 }  // namespace coupled_dynamics_test
@@ -185,42 +236,41 @@ TEST(TEST_CATEGORY, coupled_plane_wave_crosses_a_pd_band_at_the_plate_wave_speed
   const double nu = 0.33;
   for (const Element kind : elementKinds) {
   const auto plate = makeMixedPlate(200, 10, nu, Zone::Band, kind);
-  const auto& mesh = plate.shell.mesh;
-  const LocalIndex numNodes = mesh.numNodes();
-  const double pushSpeed = 0.1, rampTime = 1.0;
-  const auto actions = pushedEdgeActions<TEST_MEMSPACE>(mesh, 0.5 * spacing, pushSpeed, rampTime);
-  auto solver = makeSolver<TEST_EXECSPACE>(plate, actions);
-  ASSERT_GT(solver.body().bonds.numBonds(), 0u);
-
-  // Stations on the centre line: 40 and 80 mm (CCM), 120 mm (past the band).
-  const double stations[3] = {40e-3, 80e-3, 120e-3};
-  LocalIndex probe[3] = {0, 0, 0};
-  for (LocalIndex node = 0; node < numNodes; ++node)
-    for (int s = 0; s < 3; ++s)
-      if (std::abs(mesh.coordinates(node, 0) - stations[s]) < 1e-9 && std::abs(mesh.coordinates(node, 1) - 5e-3) < 1e-9)
-        probe[s] = node;
   const double expectedSpeed = std::sqrt(youngModulus / (density * (1 - nu * nu)));
-  double arrival[3] = {0.0, 0.0, 0.0}, previous[3] = {0.0, 0.0, 0.0};
-  const double endTime = 1.3 * stations[2] / expectedSpeed;
-  while (solver.time() < endTime && arrival[2] == 0.0) {
-    solver.step();
-    const auto velocities = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.velocities());
-    for (int s = 0; s < 3; ++s) {
-      const double v = velocities(probe[s], 0);
-      if (arrival[s] == 0.0 && v >= 0.5 * pushSpeed)
-        arrival[s] = solver.time() - 0.5 * solver.timeStep() -
-                     solver.timeStep() * (v - 0.5 * pushSpeed) / (v - previous[s]);
-      previous[s] = v;
-    }
-  }
-  for (int s = 0; s < 3; ++s) ASSERT_GT(arrival[s], 0.0) << "station " << s;
-  const double ccmSpeed = (stations[1] - stations[0]) / (arrival[1] - arrival[0]);
-  const double acrossBand = (stations[2] - stations[1]) / (arrival[2] - arrival[1]);
+  const WaveSpeeds speeds = planeWaveSpeeds(plate, expectedSpeed);
+  const double ccmSpeed = speeds.ccm, acrossBand = speeds.acrossBand;
   std::printf("plane wave, %s: CCM %.1f m/s, across the PD band %.1f m/s, sqrt(E/(rho(1-nu^2))) = %.1f m/s\n",
               elementName(kind), ccmSpeed, acrossBand, expectedSpeed);
   EXPECT_NEAR(ccmSpeed / expectedSpeed, 1.0, 0.02);
   EXPECT_NEAR(acrossBand / expectedSpeed, 1.0, 0.02);
   }
+}
+
+// Triangles (shell/mitc3_triangle.hpp; the explicit solver takes MITC4's corotational
+// element for them): the same energy conservation and wave speed as on quads.
+TEST(TEST_CATEGORY, coupled_free_vibration_and_plane_wave_on_triangles) {
+  using namespace coupled_dynamics_test;
+  {
+    const auto plate = makeMixedPlate(24, 24, 0.2, Zone::Disc, Element::Mitc4, true);
+    auto solver = makeSolver<TEST_EXECSPACE>(plate, perishell::solvers::makeFreeActions<TEST_MEMSPACE>(
+                                                        plate.shell.mesh.numNodes()));
+    EXPECT_GT(solver.numElements(), 24 * 24);  // triangles: twice the cells, less the pure PD ones
+    startVibration(solver, plate);
+    const VibrationEnergies energies = vibrationEnergies(solver, 2000);
+    std::printf("triangles, PD disc: dt = %.4e s, worst energy drift over 2000 steps %.3e, peak strain / initial "
+                "kinetic %.3f\n", solver.timeStep(), energies.worstDrift, energies.largestStrain);
+    EXPECT_GT(energies.largestStrain, 0.3);
+    EXPECT_LT(energies.worstDrift, 1e-3);
+  }
+  const double nu = 0.33;
+  const auto plate = makeMixedPlate(200, 10, nu, Zone::Band, Element::Mitc4, true);
+  const double expectedSpeed = std::sqrt(youngModulus / (density * (1 - nu * nu)));
+  const WaveSpeeds speeds = planeWaveSpeeds(plate, expectedSpeed);
+  const double ccmSpeed = speeds.ccm, acrossBand = speeds.acrossBand;
+  std::printf("plane wave, triangles: CCM %.1f m/s, across the PD band %.1f m/s, sqrt(E/(rho(1-nu^2))) = %.1f m/s\n",
+              ccmSpeed, acrossBand, expectedSpeed);
+  EXPECT_NEAR(ccmSpeed / expectedSpeed, 1.0, 0.02);
+  EXPECT_NEAR(acrossBand / expectedSpeed, 1.0, 0.02);
 }
 
 namespace coupled_dynamics_test {

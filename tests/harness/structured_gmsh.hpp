@@ -3,7 +3,9 @@
 // shell benchmarks' meshes (curved panels, spheres, twisted strips) with named points
 // (physical dimension 0, one node each) and named grid lines (physical dimension 1), read back
 // by the project's Gmsh reader as node and edge sets. Node (i, j), 0 <= i <= n1, 0 <= j <= n2,
-// sits at position(i / n1, j / n2); quads run counter-clockwise in (i, j).
+// sits at position(i / n1, j / n2); quads run counter-clockwise in (i, j). Cells that
+// splitIntoTriangles selects are written as two triangles (Gmsh type 2) across a diagonal
+// that alternates with i + j, as a mesher's right-angled triangles do.
 #include <algorithm>
 #include <array>
 #include <cstdlib>
@@ -25,6 +27,9 @@ class StructuredGmshGrid {
       : cells1_(cells1), cells2_(cells2), position_(std::move(position)) {}
 
   int tag(int i, int j) const { return 1 + j * (cells1_ + 1) + i; }  // Gmsh node tag
+
+  // Cells (i, j) for which `split` is true become two triangles.
+  void splitIntoTriangles(std::function<bool(int, int)> split) { split_ = std::move(split); }
 
   void addPoint(const std::string& name, int i, int j) { groups_.push_back({name, 0, {tag(i, j)}}); }
 
@@ -65,10 +70,24 @@ class StructuredGmshGrid {
       const auto x = coordinates(k);
       msh << x[0] << " " << x[1] << " " << x[2] << "\n";
     }
-    int numElements = cells1_ * cells2_;
+    std::vector<std::array<int, 4>> quads;
+    std::vector<std::array<int, 3>> triangles;
+    for (int j = 0; j < cells2_; ++j)
+      for (int i = 0; i < cells1_; ++i) {
+        const int a = tag(i, j), b = tag(i + 1, j), c = tag(i + 1, j + 1), d = tag(i, j + 1);
+        if (!split_ || !split_(i, j))
+          quads.push_back({a, b, c, d});
+        else if ((i + j) % 2 == 0)
+          triangles.insert(triangles.end(), {{a, b, c}, {a, c, d}});
+        else
+          triangles.insert(triangles.end(), {{a, b, d}, {b, c, d}});
+      }
+    int numElements = static_cast<int>(quads.size() + triangles.size());
     for (const auto& group : groups_)
       numElements += group.dimension == 0 ? 1 : static_cast<int>(group.nodes.size()) - 1;
-    msh << "$EndNodes\n$Elements\n" << groups_.size() + 1 << " " << numElements << " 1 " << numElements << "\n";
+    const int surfaceBlocks = (quads.empty() ? 0 : 1) + (triangles.empty() ? 0 : 1);
+    msh << "$EndNodes\n$Elements\n" << groups_.size() + surfaceBlocks << " " << numElements << " 1 " << numElements
+        << "\n";
     int element = 1;
     for (std::size_t g = 0; g < groups_.size(); ++g) {
       const auto& nodes = groups_[g].nodes;
@@ -79,11 +98,14 @@ class StructuredGmshGrid {
       msh << "1 " << g + 1 << " 1 " << nodes.size() - 1 << "\n";
       for (std::size_t k = 0; k + 1 < nodes.size(); ++k) msh << element++ << " " << nodes[k] << " " << nodes[k + 1] << "\n";
     }
-    msh << "2 1 3 " << cells1_ * cells2_ << "\n";
-    for (int j = 0; j < cells2_; ++j)
-      for (int i = 0; i < cells1_; ++i)
-        msh << element++ << " " << tag(i, j) << " " << tag(i + 1, j) << " " << tag(i + 1, j + 1) << " "
-            << tag(i, j + 1) << "\n";
+    if (!quads.empty()) {
+      msh << "2 1 3 " << quads.size() << "\n";
+      for (const auto& q : quads) msh << element++ << " " << q[0] << " " << q[1] << " " << q[2] << " " << q[3] << "\n";
+    }
+    if (!triangles.empty()) {
+      msh << "2 1 2 " << triangles.size() << "\n";
+      for (const auto& t : triangles) msh << element++ << " " << t[0] << " " << t[1] << " " << t[2] << "\n";
+    }
     msh << "$EndElements\n";
     std::ofstream file(path);
     file << msh.str();
@@ -104,6 +126,7 @@ class StructuredGmshGrid {
 
   int cells1_, cells2_;
   Position position_;
+  std::function<bool(int, int)> split_;
   std::vector<Group> groups_;
 };
 

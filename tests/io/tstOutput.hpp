@@ -366,6 +366,30 @@ TEST(TEST_CATEGORY, output_xdmf_time_series_reads_back_exactly) {
   }
 }
 
+TEST(TEST_CATEGORY, output_xdmf_writes_triangles_as_a_mixed_topology) {
+  const TemporaryDirectory directory;
+  auto mesh = plate();
+  // Element 0 (nodes 0 1 6 5) becomes the triangle 0 1 6; the others stay quads.
+  mesh.quads(0, 3) = mesh.quads(0, 2);
+  perishell::io::XdmfTimeSeriesWriter writer(directory.path(), "plate", mesh);
+  writer.writeStep(0.0, {{"damage", 1, nodalValues(1, 0.1)}});
+  const auto topology = readDataset(directory / "plate_mesh.h5", "/topology", true);
+  const std::size_t length = 4 + 5 * (kElements - 1);
+  ASSERT_EQ(dimensionsText(topology.dimensions), std::to_string(length));
+  std::vector<int> expected = {4, mesh.quads(0, 0), mesh.quads(0, 1), mesh.quads(0, 2)};
+  for (int element = 1; element < kElements; ++element) {
+    expected.push_back(5);
+    for (int corner = 0; corner < 4; ++corner) expected.push_back(mesh.quads(element, corner));
+  }
+  EXPECT_EQ(std::vector<int>(topology.ints.begin(), topology.ints.end()), expected);
+  const auto root = XmlReader(readFile(writer.xdmfPath())).document();
+  const XmlElement& topologyItem = root->only("Domain").only("Grid").only("Grid").only("Topology");
+  EXPECT_EQ(topologyItem.attribute("TopologyType"), "Mixed");
+  EXPECT_EQ(topologyItem.attribute("NumberOfElements"), std::to_string(kElements));
+  expectHdfDataItem(topologyItem.only("DataItem"), directory.path(), "plate_mesh.h5:/topology",
+                    std::to_string(length), "Int", "4");
+}
+
 template <class ExceptionT, class CallT>
 std::string messageOf(CallT&& call) {
   try {

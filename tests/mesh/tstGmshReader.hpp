@@ -182,6 +182,62 @@ TEST(TEST_CATEGORY, gmsh_plate_equals_generated_plate) {
   EXPECT_EQ(sets.elementSets.size(), 1u);
 }
 
+// tests/data/plate_triangle.msh: plate_4x2.msh with its first quad (tags 1 5 13 12) cut into
+// the triangles 1 5 13 and 1 13 12, written after the quads.
+std::string mixedPlateText() {
+  std::ifstream file(dataPath("plate_triangle.msh"));
+  std::ostringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+// The z component of each triangle's vector area, (x1 - x0) x (x2 - x0).
+std::vector<double> triangleNormalsZ(const HostQuadMesh& mesh) {
+  std::vector<double> normals;
+  for (LocalIndex e = 0; e < mesh.numElements(); ++e) {
+    if (!perishell::mesh::isTriangle(mesh.quads, e)) continue;
+    const auto x = [&](int a, int k) { return mesh.coordinates(mesh.quads(e, a), k); };
+    normals.push_back((x(1, 0) - x(0, 0)) * (x(2, 1) - x(0, 1)) - (x(1, 1) - x(0, 1)) * (x(2, 0) - x(0, 0)));
+  }
+  return normals;
+}
+
+TEST(TEST_CATEGORY, gmsh_mixed_quads_and_triangles_are_read) {
+  const ShellMesh mixed = perishell::mesh::parseGmsh(mixedPlateText(), "mixed.msh");
+  ASSERT_EQ(mixed.mesh.numNodes(), 15);
+  ASSERT_EQ(mixed.mesh.numElements(), 9);
+  const auto triangleNormals = triangleNormalsZ(mixed.mesh);
+  ASSERT_EQ(triangleNormals.size(), 2u);
+  for (const double z : triangleNormals) EXPECT_NEAR(z, 0.01, 1e-15);  // 2 x 0.005 m^2, along +z
+  EXPECT_NEAR(totalArea<TEST_EXECSPACE>(mixed.mesh), 0.08, 1e-16);
+  const auto normals = nodeNormalsOnHost<TEST_EXECSPACE>(mixed.mesh);
+  for (int node = 0; node < 15; ++node) EXPECT_EQ(normals(node, 2), 1.0) << node;
+  EXPECT_EQ(mixed.sets.elementSet("plate").size(), 9u);
+  const ShellMesh generated = perishell::mesh::makePlate(0.4, 0.2, 0.1);
+  const auto toGenerated = matchNodes(mixed.mesh, generated.mesh);
+  EXPECT_EQ(renamedEdges(mixed.sets.edgeSet("left"), toGenerated), sortedEdges(generated.sets.edgeSet("left")));
+
+  // A triangle written clockwise is turned to its patch's orientation; the whole patch
+  // follows the first element when that is reversed.
+  const auto oneFlipped = perishell::mesh::parseGmsh(replaced(mixedPlateText(), "13 1 13 12", "13 12 13 1"), "one.msh");
+  for (const double z : triangleNormalsZ(oneFlipped.mesh)) EXPECT_NEAR(z, 0.01, 1e-15);
+  const auto allFlipped =
+      perishell::mesh::parseGmsh(replaced(mixedPlateText(), "6 5 6 14 13", "6 13 14 6 5"), "all.msh");
+  for (const double z : triangleNormalsZ(allFlipped.mesh)) EXPECT_NEAR(z, -0.01, 1e-15);
+  const auto flippedNormals = nodeNormalsOnHost<TEST_EXECSPACE>(allFlipped.mesh);
+  for (int node = 0; node < 15; ++node) EXPECT_EQ(flippedNormals(node, 2), -1.0) << node;
+}
+
+TEST(TEST_CATEGORY, gmsh_degenerate_triangles_are_named) {
+  EXPECT_EQ(readerError(replaced(mixedPlateText(), "5 1 5 13\n", "5 1 5 1\n")),
+            "mem.msh:81: triangle element 5 repeats node tag 1");
+  // Nodes 1, 5 and 6 lie on y = 0.
+  EXPECT_EQ(readerError(replaced(mixedPlateText(), "5 1 5 13\n", "5 1 5 6\n")),
+            "mem.msh:81: triangle element 5 (node tags 1 5 6) has zero area: its nodes lie on one line");
+  EXPECT_EQ(readerError(replaced(mixedPlateText(), "2 1 2 2\n", "2 1 9 2\n")),
+            "mem.msh:80: second-order element type 9 is not supported; mesh with Mesh.ElementOrder = 1");
+}
+
 TEST(TEST_CATEGORY, gmsh_quads_are_oriented_like_their_patch_first_quad) {
   const ShellMesh generated = perishell::mesh::makePlate(0.4, 0.2, 0.1);
   // Quad 6 written clockwise: turned back to counter-clockwise (+z).
@@ -311,12 +367,8 @@ TEST(TEST_CATEGORY, gmsh_reader_errors_name_file_line_and_reason) {
                 ":40: truncated $Nodes section: the file ends while reading a node coordinate");
   EXPECT_EQ(readerError(replaced(plate, "12 15 8 3 9", "12 15 8 3 99")),
             "mem.msh:80: element 12 refers to unknown node tag 99");
-  EXPECT_EQ(fileError(dataPath("plate_triangle.msh")),
-            dataPath("plate_triangle.msh") +
-                ":81: triangles (element type 2) are not supported: shell elements are 4-node quads "
-                "only (recombine the surface mesh, Mesh.RecombineAll = 1)");
   EXPECT_EQ(readerError(replaced(plate, "2 8 3\n", "2 8 4\n")),
-            "mem.msh:68: line element 2 (node tags 8 4) is not an edge of any quad");
+            "mem.msh:68: line element 2 (node tags 8 4) is not an edge of any quad or triangle");
   EXPECT_EQ(readerError(replaced(plate, "9 15 1 15", "9 16 1 15")),
             "mem.msh:23: the header announces 16 nodes but the blocks hold 15");
   EXPECT_EQ(readerError(replaced(plate, "0.2 0.1 0\n", "0.2 abc 0\n")),
@@ -328,7 +380,7 @@ TEST(TEST_CATEGORY, gmsh_reader_errors_name_file_line_and_reason) {
   EXPECT_EQ(readerError(replaced(plate, "14 15 9 10", "14 15 9 14")),
             "mem.msh:79: quad element 11 repeats node tag 14");
   EXPECT_EQ(readerError(moebiusText()),
-            "mem.msh:38: quads 5 and 4 cannot be oriented consistently: the surface is not orientable");
+            "mem.msh:38: elements 5 and 4 cannot be oriented consistently: the surface is not orientable");
 }
 
 // Each defect on its own, in both orientations; a valid quad passes in both orientations and

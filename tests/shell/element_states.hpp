@@ -124,6 +124,15 @@ inline Nodes macNealHarderNodes() {
           {0.04, 0.02, 0.0}, {0.18, 0.03, 0.0}, {0.16, 0.08, 0.0}, {0.08, 0.08, 0.0}};
 }
 inline Quads macNealHarderQuads() { return {{0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}, {4, 5, 6, 7}}; }
+// The same patch cut into ten triangles (a b c c), diagonals in both directions, and a mix of
+// two quads and six triangles.
+inline Quads macNealHarderTriangles() {
+  return {{0, 1, 5, 5}, {0, 5, 4, 4}, {1, 2, 6, 6}, {1, 6, 5, 5}, {2, 7, 6, 6},
+          {2, 3, 7, 7}, {3, 4, 7, 7}, {3, 0, 4, 4}, {4, 5, 7, 7}, {5, 6, 7, 7}};
+}
+inline Quads macNealHarderMixed() {
+  return {{0, 1, 5, 4}, {1, 2, 6, 6}, {1, 6, 5, 5}, {2, 3, 7, 6}, {3, 4, 7, 7}, {3, 0, 4, 4}, {4, 6, 7, 7}, {4, 5, 6, 6}};
+}
 
 // The state turned as a whole by a fixed rotation Q (returned) and shifted.
 inline ElementState rigidlyRotated(const ElementState& state, double Q[3][3]) {
@@ -143,8 +152,10 @@ inline ElementState rigidlyRotated(const ElementState& state, double Q[3][3]) {
 // quads under an end shear P, over Euler-Bernoulli's P L^3 / (3 E I). `skew` shifts the
 // interior nodes along the strip by that fraction of a cell, alternately on the two sides (a
 // distorted mesh). `assemble` gives the global linear stiffness of the element under test.
+// With `triangles`, each cell is two triangles (a b c c, mesh/quad_mesh.hpp), the diagonal
+// alternating from cell to cell.
 using Assembler = std::function<Eigen::MatrixXd(const Nodes&, const Quads&, const shell::ShellSection&)>;
-inline double cantileverTipRatio(int cells, double skew, const Assembler& assemble) {
+inline double cantileverTipRatio(int cells, double skew, const Assembler& assemble, bool triangles = false) {
   const double length = 10.0, width = 1.0, load = 1e-6;
   shell::ShellSection section;
   section.youngModulus = 1.2e6;
@@ -157,7 +168,18 @@ inline double cantileverTipRatio(int cells, double skew, const Assembler& assemb
       const double shift = (i > 0 && i < cells) ? (j == 0 ? skew : -skew) * length / cells : 0.0;
       nodes.push_back({length * i / cells + shift, width * j, 0.0});
     }
-  for (int i = 0; i < cells; ++i) quads.push_back({i, i + 1, cells + 2 + i, cells + 1 + i});
+  for (int i = 0; i < cells; ++i) {
+    const int a = i, b = i + 1, c = cells + 2 + i, d = cells + 1 + i;
+    if (!triangles) {
+      quads.push_back({a, b, c, d});
+    } else if (i % 2 == 0) {
+      quads.push_back({a, b, c, c});
+      quads.push_back({a, c, d, d});
+    } else {
+      quads.push_back({a, b, d, d});
+      quads.push_back({b, c, d, d});
+    }
+  }
   const Eigen::MatrixXd K = assemble(nodes, quads, section);
   // Clamped: all DOF of nodes 0 and cells + 1. Free DOF are the others, in order.
   std::vector<int> freeDofs;

@@ -84,6 +84,9 @@ class XdmfTimeSeriesWriter {
   std::string baseName_;
   LocalIndex numNodes_;
   LocalIndex numElements_;
+  // 0 for a quad mesh (topology numElements x 4, "Quadrilateral"); with triangles, the length
+  // of the "Mixed" topology: per element its XDMF type (4 triangle, 5 quad) and its corners.
+  std::size_t mixedTopologyLength_ = 0;
   std::vector<StepRecord> steps_;
   std::uintmax_t xdmfBytes_ = 0;  // the .xmf's size as this writer left it
 };

@@ -1,12 +1,14 @@
 #pragma once
-// Gmsh MSH 4.1 ASCII import of a quad shell mesh with its physical groups as named sets.
+// Gmsh MSH 4.1 ASCII import of a shell mesh of quads and triangles with its physical groups
+// as named sets.
 //
 // Read: $MeshFormat (4.1, ASCII), $PhysicalNames, $Entities, $Nodes, $Elements; other
-// sections ($Periodic, $NodeData, ...) are skipped. Elements: 4-node quads (type 3) become
-// the mesh; on physical curves, 2-node lines (type 1) become edge sets; on physical points,
+// sections ($Periodic, $NodeData, ...) are skipped. Elements: 4-node quads (type 3) and
+// 3-node triangles (type 2, stored as a b c c: mesh/quad_mesh.hpp) become the mesh, in any
+// mix; on physical curves, 2-node lines (type 1) become edge sets; on physical points,
 // points (type 15) become node sets. Lines and points on entities without a physical group
-// carry no set and are ignored; every other element type is rejected (triangles: the shell
-// elements are quads only; second-order and volume elements: not a first-order shell mesh).
+// carry no set and are ignored; every other element type is rejected (second-order and
+// volume elements: not a first-order shell mesh).
 //
 // Sets: a physical surface gives an element set and the node set of its quads' nodes; a
 // physical curve an edge set (each edge ordered as its quad traverses it) and the node set

@@ -11,7 +11,7 @@
 
 namespace perishell::mesh {
 
-// Node normal n_i = normalize(sum over adjacent quads of the quad's vector area
+// Node normal n_i = normalize(sum over adjacent elements of the element's vector area
 // a_e = 1/2 (x_2 - x_0) x (x_3 - x_1)): the area-weighted facet normal. a_e is the exact
 // integral of g_1 x g_2 over a bilinear quad, so warped quads are weighted correctly too.
 // Throws std::runtime_error naming the first node whose adjacent vector areas cancel or
@@ -37,7 +37,9 @@ CoordinateView<MemorySpaceT> computeNodeNormals(const ExecutionSpaceT& space,
         const double vectorArea[3] = {0.5 * (d1[1] * d2[2] - d1[2] * d2[1]),
                                       0.5 * (d1[2] * d2[0] - d1[0] * d2[2]),
                                       0.5 * (d1[0] * d2[1] - d1[1] * d2[0])};
-        for (int a = 0; a < 4; ++a)
+        // A triangle (a b c c) has three corners: its vector area, 1/2 (c - a) x (c - b), is
+        // the formula's with x_3 = x_2.
+        for (int a = 0; a < cornerCount(quads, element); ++a)
           for (int k = 0; k < 3; ++k) Kokkos::atomic_add(&normals(quads(element, a), k), vectorArea[k]);
       });
   int firstDegenerateNode = INT_MAX;

@@ -1,6 +1,14 @@
 #pragma once
-// A quad-meshed shell mid-surface: node coordinates and 4-node connectivity, in memory
-// space MemorySpaceT. Generators build it on the host; mirrorTo moves it to the device.
+// A shell mid-surface meshed with quads and triangles: node coordinates and 4-node
+// connectivity, in memory space MemorySpaceT. Generators build it on the host; mirrorTo
+// moves it to the device.
+//
+// A triangle a b c is stored as the quad a b c c (its fourth corner repeats the third).
+// The collapsed bilinear map of such a quad covers the triangle exactly and its 2x2 Gauss
+// rule integrates the triangle's area, and each corner's share A/3 of it, exactly; so
+// areas, node weights and pressure loads need no second code path. What walks corners or
+// edges uses cornerCount (an element has cornerCount edges, (k, k + 1 mod cornerCount)),
+// and the shell element builds a triangle's own stiffness (shell/mitc3_triangle.hpp).
 #include <perishell/core/types.hpp>
 
 #include <string>
@@ -15,6 +23,18 @@ struct QuadMesh {
   LocalIndex numNodes() const { return static_cast<LocalIndex>(coordinates.extent(0)); }
   LocalIndex numElements() const { return static_cast<LocalIndex>(quads.extent(0)); }
 };
+
+// Whether element e is a triangle (its fourth corner repeats the third).
+template <class ConnectivityT>
+KOKKOS_INLINE_FUNCTION bool isTriangle(const ConnectivityT& quads, LocalIndex e) {
+  return quads(e, 3) == quads(e, 2);
+}
+
+// The number of distinct corners (and of edges) of element e: 3 or 4.
+template <class ConnectivityT>
+KOKKOS_INLINE_FUNCTION int cornerCount(const ConnectivityT& quads, LocalIndex e) {
+  return isTriangle(quads, e) ? 3 : 4;
+}
 
 using HostQuadMesh = QuadMesh<Kokkos::HostSpace>;
 

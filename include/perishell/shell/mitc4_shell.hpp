@@ -19,6 +19,10 @@
 // use the same order: u v w theta_x theta_y theta_z. Forces are internal resisting forces
 // (equilibrium: f = external load).
 //
+// Triangles (stored as a b c c, mesh/quad_mesh.hpp) take their K_l from
+// shell/mitc3_triangle.hpp (zero for node 3); the corotational part below serves both
+// unchanged: node 3 moves and turns with node 2, and the assembly adds both into one node.
+//
 // All functions are written once for host and device on small fixed arrays. A warped
 // reference element (nodes off the flat frame's plane by z_a) gets K_l of its flat
 // projection, tied to the true nodes by rigid links (applyWarpingCorrection below); rigid
@@ -27,6 +31,8 @@
 #include <perishell/core/rotation.hpp>
 #include <perishell/mesh/bilinear_quad.hpp>
 #include <perishell/mesh/quad_shape.hpp>
+#include <perishell/shell/mitc3_triangle.hpp>
+#include <perishell/shell/shell_section.hpp>
 
 #include <array>
 #include <cmath>
@@ -35,56 +41,8 @@
 
 namespace perishell::shell {
 
-// Isotropic plane-stress section.
-struct ShellSection {
-  double youngModulus = 0.0;          // E [Pa]
-  double poissonRatio = 0.0;          // nu [-]
-  double thickness = 0.0;             // t [m]
-  double shearCorrection = 5.0 / 6.0;  // kappa of the transverse shear stiffness kappa G t
-  // Drilling penalty: energy 1/2 (drillingFactor G t) * integral of (theta_z - omega)^2 dA,
-  // omega = 1/2 (dv/dx - du/dy), integrated at the 2x2 Gauss points: at the centre alone
-  // the four theta_z would share one constraint and a checkerboard of theta_z would cost
-  // no energy on a regular mesh (a singular tangent). Where facets meet at an angle (curved
-  // and twisted shells) it is also what ties one facet's in-plane rotation to its
-  // neighbour's bending: too weak a tie converges to a too flexible shell (the MacNeal-Harder
-  // twisted beam, refined to 48 x 8: 1.32 of the reference at 1e-3, 1.03 at 1e-2, 1.001 at
-  // 0.1), too strong a one stiffens the membrane (pinched hemisphere 16 x 16: 0.987 at 0.1,
-  // 0.962 at 1; Hughes & Brezzi's gamma = G is the factor 1). The patch tests stay exact for
-  // any factor (theta_z = omega there). Measured in docs/verification.md.
-  double drillingFactor = 0.1;
-  // Membrane hourglass stiffness coefficient r of the explicit one-point element
-  // (shell/one_point_shell.hpp; LS-DYNA's default QM is 0.1). MITC4 has no hourglass modes.
-  double hourglassCoefficient = 0.1;
-};
-
 constexpr int shellNodeCount = 4;
 constexpr int shellDofCount = 24;
-// Generalised strains at a point, in the element frame: membrane eps_xx eps_yy gamma_xy;
-// curvatures kappa_xx kappa_yy kappa_xy (engineering); transverse shear gamma_xz gamma_yz;
-// drilling mismatch theta_z - omega.
-constexpr int shellStrainCount = 9;
-
-// Host checks (bad input gets a message naming the item and the reason).
-inline void checkShellSection(const ShellSection& section) {
-  if (!(section.youngModulus > 0.0) || !std::isfinite(section.youngModulus))
-    throw std::invalid_argument("shell section: young modulus must be positive, got " +
-                                std::to_string(section.youngModulus));
-  if (!(section.poissonRatio > -1.0 && section.poissonRatio < 0.5))
-    throw std::invalid_argument("shell section: poisson ratio must lie in (-1, 0.5), got " +
-                                std::to_string(section.poissonRatio));
-  if (!(section.thickness > 0.0) || !std::isfinite(section.thickness))
-    throw std::invalid_argument("shell section: thickness must be positive, got " +
-                                std::to_string(section.thickness));
-  if (!(section.shearCorrection > 0.0) || !std::isfinite(section.shearCorrection))
-    throw std::invalid_argument("shell section: shear correction must be positive, got " +
-                                std::to_string(section.shearCorrection));
-  if (!(section.drillingFactor > 0.0) || !std::isfinite(section.drillingFactor))
-    throw std::invalid_argument("shell section: drilling factor must be positive, got " +
-                                std::to_string(section.drillingFactor));
-  if (!(section.hourglassCoefficient > 0.0) || !std::isfinite(section.hourglassCoefficient))
-    throw std::invalid_argument("shell section: hourglass coefficient must be positive, got " +
-                                std::to_string(section.hourglassCoefficient));
-}
 
 namespace detail {
 
@@ -145,6 +103,30 @@ KOKKOS_INLINE_FUNCTION ShellReference shellReference(const double referencePosit
   return reference;
 }
 
+// Whether the element is a triangle stored as the quad a b c c (mesh/quad_mesh.hpp): its
+// nodes 2 and 3 are one node, so their coordinates are bitwise equal.
+KOKKOS_INLINE_FUNCTION bool isTriangleElement(const double positions[4][3]) {
+  return positions[3][0] == positions[2][0] && positions[3][1] == positions[2][1] && positions[3][2] == positions[2][2];
+}
+
+namespace detail {
+
+// A triangle's corners in its flat frame (the frame's plane holds all three).
+KOKKOS_INLINE_FUNCTION void triangleCorners(const ShellReference& reference, double corners[3][2]) {
+  for (int a = 0; a < 3; ++a)
+    for (int k = 0; k < 2; ++k) corners[a][k] = reference.local[a][k];
+}
+
+// An 18 x 18 triangle matrix in the quad's 24 x 24 layout (node 3's rows and columns zero).
+KOKKOS_INLINE_FUNCTION void embedTriangleMatrix(const double triangle[triangleDofCount][triangleDofCount],
+                                                double quad[shellDofCount][shellDofCount]) {
+  for (int r = 0; r < shellDofCount; ++r)
+    for (int c = 0; c < shellDofCount; ++c)
+      quad[r][c] = r < triangleDofCount && c < triangleDofCount ? triangle[r][c] : 0.0;
+}
+
+}  // namespace detail
+
 // Area of the flat (projected) quad: half the length of the diagonals' cross product.
 KOKKOS_INLINE_FUNCTION double shellReferenceArea(const double referencePositions[4][3]) {
   double diagonal13[3], diagonal24[3], normal[3];
@@ -160,7 +142,8 @@ KOKKOS_INLINE_FUNCTION double shellReferenceArea(const double referencePositions
 // bilinear map cannot carry (mesh/quad_shape.hpp: coincident corners, zero area, a bow-tie, a
 // re-entrant or straight corner; either node order is fine). `element` names it in the message.
 inline void checkShellElement(const double referencePositions[4][3], long element) {
-  const std::string name = "shell element " + std::to_string(element) + ": ";
+  const bool triangle = isTriangleElement(referencePositions);
+  const std::string name = std::string(triangle ? "shell triangle " : "shell element ") + std::to_string(element) + ": ";
   std::array<std::array<double, 3>, 4> corners;
   for (int a = 0; a < 4; ++a)
     for (int k = 0; k < 3; ++k) {
@@ -168,7 +151,8 @@ inline void checkShellElement(const double referencePositions[4][3], long elemen
         throw std::invalid_argument(name + "node " + std::to_string(a) + " has a non-finite coordinate");
       corners[a][k] = referencePositions[a][k];
     }
-  const mesh::QuadShapeCheck shape = mesh::checkQuadShape(corners);
+  const mesh::QuadShapeCheck shape =
+      triangle ? mesh::checkTriangleShape({corners[0], corners[1], corners[2]}) : mesh::checkQuadShape(corners);
   switch (shape.defect) {
     case mesh::QuadShapeDefect::none:
       return;
@@ -262,26 +246,19 @@ KOKKOS_INLINE_FUNCTION double shellStrainDisplacement(const ShellReference& refe
   return determinant;
 }
 
-// Section stiffness on the generalised strains (diagonal blocks): membrane E t/(1-nu^2)
-// [1 nu 0; nu 1 0; 0 0 (1-nu)/2], bending the same times t^2/12, shear kappa G t, drilling
-// drillingFactor G t (model.md §4).
-KOKKOS_INLINE_FUNCTION void shellSectionStiffness(const ShellSection& section,
-                                                  double D[shellStrainCount][shellStrainCount]) {
-  const double E = section.youngModulus, nu = section.poissonRatio, t = section.thickness;
-  const double membrane = E * t / (1.0 - nu * nu);
-  const double bending = membrane * t * t / 12.0;
-  const double shearModulus = E / (2.0 * (1.0 + nu));
-  for (int r = 0; r < shellStrainCount; ++r)
-    for (int c = 0; c < shellStrainCount; ++c) D[r][c] = 0.0;
-  for (int block = 0; block < 2; ++block) {
-    const int o = 3 * block;
-    const double scale = block == 0 ? membrane : bending;
-    D[o][o] = D[o + 1][o + 1] = scale;
-    D[o][o + 1] = D[o + 1][o] = scale * nu;
-    D[o + 2][o + 2] = scale * 0.5 * (1.0 - nu);
+// B at the element's centre (quad: xi = eta = 0; triangle: its centroid), in the quad's layout.
+KOKKOS_INLINE_FUNCTION void shellCentreStrainDisplacement(const ShellReference& reference,
+                                                          double B[shellStrainCount][shellDofCount]) {
+  const auto& x = reference.local;
+  if (!(x[3][0] == x[2][0] && x[3][1] == x[2][1] && x[3][2] == x[2][2])) {
+    shellStrainDisplacement(reference, 0.0, 0.0, B);
+    return;
   }
-  D[6][6] = D[7][7] = section.shearCorrection * shearModulus * t;
-  D[8][8] = section.drillingFactor * shearModulus * t;
+  double corners[3][2], triangle[shellStrainCount][triangleDofCount];
+  detail::triangleCorners(reference, corners);
+  triangleStrainDisplacement(corners, 1.0 / 3.0, 1.0 / 3.0, triangle);
+  for (int r = 0; r < shellStrainCount; ++r)
+    for (int c = 0; c < shellDofCount; ++c) B[r][c] = c < triangleDofCount ? triangle[r][c] : 0.0;
 }
 
 // Rigid-link warping correction (MacNeal, "A simple quadrilateral shell element", Computers
@@ -406,10 +383,24 @@ KOKKOS_INLINE_FUNCTION void condenseEnhancedMembrane(const ShellReference& refer
 // (mesh::bilinear order): the hybrid D_Hb of the PD-CCM coupling (model.md §4, paper eq.
 // 22-23; coupling/morphing.hpp). Transverse shear and drilling keep their full stiffness:
 // eq. 22 subtracts only what the bonds carry, membrane and bending.
+// quadraticEdges: a triangle's edges with Allman's mid-side term (shell/mitc3_triangle.hpp,
+// triangleQuadraticEdges); ignored for a quad.
 KOKKOS_INLINE_FUNCTION void shellLocalStiffness(const double referencePositions[4][3], const ShellSection& section,
                                                 const double membraneBendingScale[mesh::bilinear::numGaussPoints],
+                                                unsigned quadraticEdges,
                                                 double localStiffness[shellDofCount][shellDofCount]) {
   const ShellReference reference = shellReference(referencePositions);
+  if (isTriangleElement(referencePositions)) {
+    // A flat triangle (shell/mitc3_triangle.hpp), its section scaled by the mean of the
+    // scales at the collapsed quad's Gauss points (each a mean of its corners' factors).
+    double corners[3][2], triangle[triangleDofCount][triangleDofCount];
+    detail::triangleCorners(reference, corners);
+    const double scale = 0.25 * (membraneBendingScale[0] + membraneBendingScale[1] + membraneBendingScale[2] +
+                                 membraneBendingScale[3]);
+    triangleLocalStiffness(corners, section, scale, quadraticEdges, triangle);
+    detail::embedTriangleMatrix(triangle, localStiffness);
+    return;
+  }
   double D[shellStrainCount][shellStrainCount];
   shellSectionStiffness(section, D);
   for (int r = 0; r < shellDofCount; ++r)
@@ -441,10 +432,11 @@ KOKKOS_INLINE_FUNCTION void shellLocalStiffness(const double referencePositions[
   applyWarpingCorrection(reference, localStiffness);
 }
 
+// The full section, and a triangle's edges all quadratic (no quad beside it).
 KOKKOS_INLINE_FUNCTION void shellLocalStiffness(const double referencePositions[4][3], const ShellSection& section,
                                                 double localStiffness[shellDofCount][shellDofCount]) {
   const double fullSection[mesh::bilinear::numGaussPoints] = {1.0, 1.0, 1.0, 1.0};
-  shellLocalStiffness(referencePositions, section, fullSection, localStiffness);
+  shellLocalStiffness(referencePositions, section, fullSection, allQuadraticEdges, localStiffness);
 }
 
 namespace detail {

@@ -135,9 +135,13 @@ KOKKOS_INLINE_FUNCTION OnePointReference onePointReference(const double referenc
 }
 
 // Rejects what a flat one-point element cannot represent: what checkShellElement rejects,
-// and a warp above maxOnePointWarp. `element` names it in the message.
+// a triangle, and a warp above maxOnePointWarp. `element` names it in the message.
 inline void checkOnePointShellElement(const double referencePositions[4][3], long element) {
   checkShellElement(referencePositions, element);
+  if (isTriangleElement(referencePositions))
+    throw std::invalid_argument("shell element " + std::to_string(element) +
+                                ": a triangle; the explicit one-point shell takes quads only (set "
+                                "solver.shell-element: mitc4, whose triangles are MITC3)");
   const OnePointReference r = onePointReference(referencePositions);
   double warp = 0.0;
   for (int a = 0; a < 4; ++a) warp = std::max(warp, std::abs(r.geometry.local[a][2]));

@@ -104,6 +104,10 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
       quads(k, a) = mesh.quads(ccmElements[k], a);
       for (int d = 0; d < 3; ++d) reference[a][d] = mesh.coordinates(quads(k, a), d);
     }
+    // Two distinct nodes at one point are a defect, not a triangle (a b c c).
+    if (!mesh::isTriangle(quads, k) && isTriangleElement(reference))
+      throw std::invalid_argument("shell element " + std::to_string(ccmElements[k]) +
+                                  ": zero or negative area: nodes 2 and 3 coincide");
     if (kind == ShellElementKind::OnePoint)
       checkOnePointShellElement(reference, ccmElements[k]);
     else
@@ -131,6 +135,10 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
     return body;
   }
   body.localStiffness = decltype(body.localStiffness)("shell local stiffness", ccmElements.size());
+  const std::vector<unsigned> hostEdges = triangleQuadraticEdges(quads, quads.extent(0));
+  Kokkos::View<unsigned*, Kokkos::HostSpace> hostEdgeView("shell triangle quadratic edges", hostEdges.size());
+  for (std::size_t k = 0; k < hostEdges.size(); ++k) hostEdgeView(k) = hostEdges[k];
+  const auto quadraticEdges = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostEdgeView);
   const auto b = body;
   Kokkos::parallel_for(
       "perishell::shell::localStiffness", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, b.numElements()),
@@ -141,7 +149,7 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
         const double scale[4] = {b.membraneBendingScale(e, 0), b.membraneBendingScale(e, 1),
                                  b.membraneBendingScale(e, 2), b.membraneBendingScale(e, 3)};
         double K[24][24];
-        shellLocalStiffness(reference, section, scale, K);
+        shellLocalStiffness(reference, section, scale, quadraticEdges(e), K);
         for (int r = 0; r < 24; ++r)
           for (int s = 0; s < 24; ++s) b.localStiffness(e, r, s) = K[r][s];
       });
