@@ -693,6 +693,51 @@ TEST(TEST_CATEGORY, shell_triangle_rigid_motions_and_energy_gradient) {
   EXPECT_LE(error, 1e-6 * scale);
 }
 
+TEST(TEST_CATEGORY, shell_triangle_on_three_nodes_equals_the_collapsed_quad) {
+  // The solvers evaluate a triangle with N = 3 (18 DOF); it must be the collapsed quad (N = 4,
+  // node 3 moving and turning with node 2) exactly: f_3 = P^T f_4, K_3 = P^T K_4 P, P the
+  // 24 x 18 map that copies node 2's DOF to node 3.
+  const double X[4][3] = {{0.0, 0.0, 0.0}, {1.1, 0.1, 0.3}, {0.2, 0.9, -0.2}, {0.2, 0.9, -0.2}};
+  ElementState state = stronglyDeformed();
+  for (int a = 0; a < 4; ++a)
+    for (int k = 0; k < 3; ++k) state.reference[a][k] = X[a][k];
+  for (int k = 0; k < 3; ++k) {
+    state.positions[3][k] = state.positions[2][k];
+    for (int l = 0; l < 3; ++l) state.rotations[3][k][l] = state.rotations[2][k][l];
+  }
+  double K4[dofs][dofs], K3[18][18], f4[dofs], f3[18], T4[dofs][dofs], T3[18][18];
+  shell::shellLocalStiffness(X, thickSection(), K4);
+  for (int r = 0; r < 18; ++r)
+    for (int c = 0; c < 18; ++c) K3[r][c] = K4[r][c];
+  const double W4 = shell::shellTangent(state.reference, state.positions, state.rotations, K4, f4, T4);
+  shell::addRotationAsymmetry(f4, T4);
+  const double W3 = shell::shellTangent<3>(state.reference, state.positions, state.rotations, K3, f3, T3);
+  shell::addRotationAsymmetry<3>(f3, T3);
+  EXPECT_NEAR(W3, W4, 1e-12 * W4);
+  const auto collapsed = [](int i) { return i < 12 ? std::vector<int>{i} : std::vector<int>{i, i + 6}; };
+  double forceError = 0.0, forceScale = 0.0, tangentError = 0.0, tangentScale = 0.0;
+  for (int i = 0; i < 18; ++i) {
+    double sum = 0.0;
+    for (const int k : collapsed(i)) sum += f4[k];
+    forceError = std::max(forceError, std::abs(f3[i] - sum));
+    forceScale = std::max(forceScale, std::abs(sum));
+    for (int j = 0; j < 18; ++j) {
+      double block = 0.0;
+      for (const int k : collapsed(i))
+        for (const int l : collapsed(j)) block += T4[k][l];
+      tangentError = std::max(tangentError, std::abs(T3[i][j] - block));
+      tangentScale = std::max(tangentScale, std::abs(block));
+    }
+  }
+  double forceOnly[18];
+  EXPECT_DOUBLE_EQ(shell::shellInternalForce<3>(state.reference, state.positions, state.rotations, K3, forceOnly), W3);
+  for (int i = 0; i < 18; ++i) EXPECT_EQ(forceOnly[i], f3[i]);
+  std::cout << "triangle N = 3 vs collapsed quad: force error " << forceError / forceScale << ", tangent error "
+            << tangentError / tangentScale << "\n";
+  EXPECT_LE(forceError, 1e-12 * forceScale);
+  EXPECT_LE(tangentError, 1e-12 * tangentScale);
+}
+
 TEST(TEST_CATEGORY, shell_degenerate_triangles_are_rejected) {
   const double collinear[4][3] = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {2, 0, 0}};
   const double coincident[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 0, 0}, {0, 0, 0}};

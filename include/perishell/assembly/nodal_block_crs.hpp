@@ -63,9 +63,17 @@ struct NodalBlockPattern {
   template <class ValuesViewT>
   KOKKOS_INLINE_FUNCTION void atomicAddElementMatrix(LocalIndex element, const double K[24][24],
                                                      const ValuesViewT& values) const {
-    for (int a = 0; a < 4; ++a) {
+    atomicAddElementMatrix<4>(element, K, values);
+  }
+
+  // The same for the first `Corners` nodes of the element: 3 for a triangle (a b c c), whose
+  // matrix is 18 x 18.
+  template <int Corners, class ValuesViewT>
+  KOKKOS_INLINE_FUNCTION void atomicAddElementMatrix(LocalIndex element, const double K[6 * Corners][6 * Corners],
+                                                     const ValuesViewT& values) const {
+    for (int a = 0; a < Corners; ++a) {
       const LocalIndex rowNode = quads(element, a);
-      for (int b = 0; b < 4; ++b) addBlock(rowNode, elementBlock(element, a, b), K, 6 * a, 6 * b, values);
+      for (int b = 0; b < Corners; ++b) addBlock(rowNode, elementBlock(element, a, b), K, 6 * a, 6 * b, values);
     }
   }
 

@@ -3,8 +3,8 @@
 // triangle counterpart of the MITC4 element's K_l (shell/mitc4_shell.hpp), used for every
 // triangle of a mesh (stored as a b c c, mesh/quad_mesh.hpp). The corotational machinery
 // (frame, deformational DOF, forces and tangents as exact derivatives of 1/2 d^T K_l d) is
-// the quad's, unchanged: it sees the triangle as a quad whose nodes 2 and 3 coincide, and
-// K_l has zero rows and columns for node 3.
+// the quad's, instantiated for 3 corners: the triangle is the quad whose nodes 2 and 3
+// coincide, and K_l has zero rows and columns for node 3.
 //  - Membrane with drilling rotations: Allman's triangle (D. J. Allman, "A compatible
 //    triangular element including vertex rotations for plane elasticity analysis",
 //    Computers & Structures 19 (1984) 1-8): the quadratic (6-node) triangle whose mid-side

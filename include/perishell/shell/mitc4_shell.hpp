@@ -20,8 +20,10 @@
 // (equilibrium: f = external load).
 //
 // Triangles (stored as a b c c, mesh/quad_mesh.hpp) take their K_l from
-// shell/mitc3_triangle.hpp (zero for node 3); the corotational part below serves both
-// unchanged: node 3 moves and turns with node 2, and the assembly adds both into one node.
+// shell/mitc3_triangle.hpp (zero for node 3); the corotational part below serves both: its
+// functions take the corner count N, and N = 3 evaluates the collapsed quad's frame and
+// energy on the triangle's 3 nodes and 18 DOF (the same numbers as N = 4 with node 3 moving
+// and turning with node 2, at about half the cost).
 //
 // All functions are written once for host and device on small fixed arrays. A warped
 // reference element (nodes off the flat frame's plane by z_a) gets K_l of its flat
@@ -58,14 +60,18 @@ struct FrameLengths {
 // product of the diagonals, e1 along the mean of the two xi-direction edges made orthogonal
 // to e3, e2 = e3 x e1. Built from cross products and lengths only, so it rotates with the
 // nodes: a rigid motion leaves the local coordinates unchanged.
-template <class T>
-KOKKOS_INLINE_FUNCTION void corotationalFrame(const T x[4][3], T frame[3][3], T centroid[3], FrameLengths<T>& lengths) {
+// N = 4: a quad; N = 3: a triangle, taken as the quad a b c c (x_3 = x_2), the frame and
+// centroid the same functions of its nodes.
+template <int N = 4, class T>
+KOKKOS_INLINE_FUNCTION void corotationalFrame(const T x[][3], T frame[3][3], T centroid[3], FrameLengths<T>& lengths) {
+  static_assert(N == 3 || N == 4, "a shell element has 3 or 4 corners");
+  const T* last = x[N - 1];
   T diagonal13[3], diagonal24[3], along[3];
   for (int k = 0; k < 3; ++k) {
-    centroid[k] = 0.25 * (x[0][k] + x[1][k] + x[2][k] + x[3][k]);
+    centroid[k] = 0.25 * (x[0][k] + x[1][k] + x[2][k] + last[k]);
     diagonal13[k] = x[2][k] - x[0][k];
-    diagonal24[k] = x[3][k] - x[1][k];
-    along[k] = x[1][k] + x[2][k] - x[0][k] - x[3][k];
+    diagonal24[k] = last[k] - x[1][k];
+    along[k] = x[1][k] + x[2][k] - x[0][k] - last[k];
   }
   rotation::cross(diagonal13, diagonal24, frame[2]);
   lengths.normal = rotation::normalise(frame[2]);
@@ -75,10 +81,10 @@ KOKKOS_INLINE_FUNCTION void corotationalFrame(const T x[4][3], T frame[3][3], T 
   rotation::cross(frame[2], frame[0], frame[1]);
 }
 
-template <class T>
-KOKKOS_INLINE_FUNCTION void corotationalFrame(const T x[4][3], T frame[3][3], T centroid[3]) {
+template <int N = 4, class T>
+KOKKOS_INLINE_FUNCTION void corotationalFrame(const T x[][3], T frame[3][3], T centroid[3]) {
   FrameLengths<T> lengths;
-  corotationalFrame(x, frame, centroid, lengths);
+  corotationalFrame<N>(x, frame, centroid, lengths);
 }
 
 }  // namespace detail
@@ -467,13 +473,14 @@ KOKKOS_INLINE_FUNCTION void localRotation(const T frame[3][3], const RotationT R
   rotation::logarithm(relative, theta);
 }
 
-// The 24 deformational DOF d (local translations and rotations per node).
-template <class T, class RotationT>
-KOKKOS_INLINE_FUNCTION void deformationalDofs(const ShellReference& reference, const T x[4][3],
-                                              const RotationT rotations[4][3][3], T d[shellDofCount]) {
+// The 6 N deformational DOF d (local translations and rotations per node) of an element of
+// N corners (a triangle's reference is its quad a b c c's).
+template <int N = 4, class T, class RotationT>
+KOKKOS_INLINE_FUNCTION void deformationalDofs(const ShellReference& reference, const T x[][3],
+                                              const RotationT rotations[][3][3], T d[]) {
   T frame[3][3], centroid[3];
-  corotationalFrame(x, frame, centroid);
-  for (int a = 0; a < 4; ++a) {
+  corotationalFrame<N>(x, frame, centroid);
+  for (int a = 0; a < N; ++a) {
     localTranslation(frame, centroid, x[a], reference.local[a], &d[6 * a]);
     localRotation(frame, rotations[a], reference.frame, &d[6 * a + 3]);
   }
@@ -481,21 +488,22 @@ KOKKOS_INLINE_FUNCTION void deformationalDofs(const ShellReference& reference, c
 
 // Column j of B = dd/dq by one forward-mode pass. A translation moves the frame and so
 // every entry; a rotation increment of node a changes only theta_a.
-KOKKOS_INLINE_FUNCTION void deformationalGradientColumn(const ShellReference& reference, const double x[4][3],
-                                                        const double rotations[4][3][3], const double frame[3][3],
-                                                        int j, double column[shellDofCount]) {
+template <int N = 4>
+KOKKOS_INLINE_FUNCTION void deformationalGradientColumn(const ShellReference& reference, const double x[][3],
+                                                        const double rotations[][3][3], const double frame[3][3],
+                                                        int j, double column[]) {
   using D = Dual<double>;
   const int node = j / 6, component = j % 6;
   if (component < 3) {
-    D seeded[4][3];
-    for (int a = 0; a < 4; ++a)
+    D seeded[N][3];
+    for (int a = 0; a < N; ++a)
       for (int k = 0; k < 3; ++k) seeded[a][k] = D(x[a][k], a == node && k == component ? 1.0 : 0.0);
-    D d[shellDofCount];
-    deformationalDofs(reference, seeded, rotations, d);
-    for (int i = 0; i < shellDofCount; ++i) column[i] = d[i].derivative;
+    D d[6 * N];
+    deformationalDofs<N>(reference, seeded, rotations, d);
+    for (int i = 0; i < 6 * N; ++i) column[i] = d[i].derivative;
     return;
   }
-  for (int i = 0; i < shellDofCount; ++i) column[i] = 0.0;
+  for (int i = 0; i < 6 * N; ++i) column[i] = 0.0;
   D phi[3], rotated[3][3], constantFrame[3][3], theta[3];
   for (int k = 0; k < 3; ++k) phi[k] = D(0.0, k == component - 3 ? 1.0 : 0.0);
   rotation::rotateBySpatialIncrementToSecondOrder(phi, rotations[node], rotated);
@@ -505,7 +513,8 @@ KOKKOS_INLINE_FUNCTION void deformationalGradientColumn(const ShellReference& re
   for (int k = 0; k < 3; ++k) column[6 * node + 3 + k] = theta[k].derivative;
 }
 
-KOKKOS_INLINE_FUNCTION void addSymmetricPair(double tangent[shellDofCount][shellDofCount], int j, int k, double value) {
+template <int N = 4>
+KOKKOS_INLINE_FUNCTION void addSymmetricPair(double tangent[][6 * N], int j, int k, double value) {
   tangent[j][k] += value;
   if (j != k) tangent[k][j] += value;
 }
@@ -515,35 +524,35 @@ KOKKOS_INLINE_FUNCTION void addSymmetricPair(double tangent[shellDofCount][shell
 // outer: q_k). Pairs of rotations of different nodes vanish; a rotation pair of one node
 // changes only that node's theta; a translation-rotation pair needs the seeded frame and
 // one theta.
-KOKKOS_INLINE_FUNCTION void addInitialStressStiffness(const ShellReference& reference, const double x[4][3],
-                                                      const double rotations[4][3][3], const double frame[3][3],
-                                                      const double s[shellDofCount],
-                                                      double tangent[shellDofCount][shellDofCount]) {
+template <int N = 4>
+KOKKOS_INLINE_FUNCTION void addInitialStressStiffness(const ShellReference& reference, const double x[][3],
+                                                      const double rotations[][3][3], const double frame[3][3],
+                                                      const double s[], double tangent[][6 * N]) {
   using DD = Dual<Dual<double>>;
-  for (int j = 0; j < shellDofCount; ++j) {
+  for (int j = 0; j < 6 * N; ++j) {
     if (j % 6 >= 3) continue;
-    for (int k = j; k < shellDofCount; ++k) {
+    for (int k = j; k < 6 * N; ++k) {
       if (k % 6 >= 3) continue;
-      DD seeded[4][3];
-      for (int a = 0; a < 4; ++a)
+      DD seeded[N][3];
+      for (int a = 0; a < N; ++a)
         for (int c = 0; c < 3; ++c) seeded[a][c] = DD(x[a][c]);
       seeded[j / 6][j % 6].value.derivative = 1.0;
       seeded[k / 6][k % 6].derivative.value = 1.0;
-      DD d[shellDofCount];
-      deformationalDofs(reference, seeded, rotations, d);
+      DD d[6 * N];
+      deformationalDofs<N>(reference, seeded, rotations, d);
       double sum = 0.0;
-      for (int i = 0; i < shellDofCount; ++i) sum += s[i] * d[i].derivative.derivative;
-      addSymmetricPair(tangent, j, k, sum);
+      for (int i = 0; i < 6 * N; ++i) sum += s[i] * d[i].derivative.derivative;
+      addSymmetricPair<N>(tangent, j, k, sum);
     }
   }
-  for (int j = 0; j < shellDofCount; ++j) {
+  for (int j = 0; j < 6 * N; ++j) {
     if (j % 6 >= 3) continue;
-    DD seeded[4][3], seededFrame[3][3], centroid[3];
-    for (int a = 0; a < 4; ++a)
+    DD seeded[N][3], seededFrame[3][3], centroid[3];
+    for (int a = 0; a < N; ++a)
       for (int c = 0; c < 3; ++c) seeded[a][c] = DD(x[a][c]);
     seeded[j / 6][j % 6].derivative.value = 1.0;
-    corotationalFrame(seeded, seededFrame, centroid);
-    for (int a = 0; a < 4; ++a)
+    corotationalFrame<N>(seeded, seededFrame, centroid);
+    for (int a = 0; a < N; ++a)
       for (int c = 0; c < 3; ++c) {
         DD phi[3] = {DD(0.0), DD(0.0), DD(0.0)};
         phi[c].value.derivative = 1.0;
@@ -552,13 +561,13 @@ KOKKOS_INLINE_FUNCTION void addInitialStressStiffness(const ShellReference& refe
         localRotation(seededFrame, rotated, reference.frame, theta);
         double sum = 0.0;
         for (int m = 0; m < 3; ++m) sum += s[6 * a + 3 + m] * theta[m].derivative.derivative;
-        addSymmetricPair(tangent, j, 6 * a + 3 + c, sum);
+        addSymmetricPair<N>(tangent, j, 6 * a + 3 + c, sum);
       }
   }
   DD constantFrame[3][3];
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) constantFrame[r][c] = DD(frame[r][c]);
-  for (int a = 0; a < 4; ++a)
+  for (int a = 0; a < N; ++a)
     for (int c = 0; c < 3; ++c)
       for (int e = c; e < 3; ++e) {
         DD phi[3] = {DD(0.0), DD(0.0), DD(0.0)};
@@ -569,31 +578,32 @@ KOKKOS_INLINE_FUNCTION void addInitialStressStiffness(const ShellReference& refe
         localRotation(constantFrame, rotated, reference.frame, theta);
         double sum = 0.0;
         for (int m = 0; m < 3; ++m) sum += s[6 * a + 3 + m] * theta[m].derivative.derivative;
-        addSymmetricPair(tangent, 6 * a + 3 + c, 6 * a + 3 + e, sum);
+        addSymmetricPair<N>(tangent, 6 * a + 3 + c, 6 * a + 3 + e, sum);
       }
 }
 
 // Everything force and tangent share: reference, current frame, d and s = K_l d.
+template <int N>
 struct ShellState {
   ShellReference reference;
   double frame[3][3];
-  double d[shellDofCount];
-  double s[shellDofCount];
+  double d[6 * N];
+  double s[6 * N];
   double energy;
 };
 
-KOKKOS_INLINE_FUNCTION void evaluateState(const double referencePositions[4][3], const double positions[4][3],
-                                          const double rotations[4][3][3],
-                                          const double localStiffness[shellDofCount][shellDofCount],
-                                          ShellState& state) {
+template <int N>
+KOKKOS_INLINE_FUNCTION void evaluateState(const double referencePositions[4][3], const double positions[][3],
+                                          const double rotations[][3][3], const double localStiffness[][6 * N],
+                                          ShellState<N>& state) {
   state.reference = shellReference(referencePositions);
   double centroid[3];
-  corotationalFrame(positions, state.frame, centroid);
-  deformationalDofs(state.reference, positions, rotations, state.d);
+  corotationalFrame<N>(positions, state.frame, centroid);
+  deformationalDofs<N>(state.reference, positions, rotations, state.d);
   state.energy = 0.0;
-  for (int r = 0; r < shellDofCount; ++r) {
+  for (int r = 0; r < 6 * N; ++r) {
     double sum = 0.0;
-    for (int c = 0; c < shellDofCount; ++c) sum += localStiffness[r][c] * state.d[c];
+    for (int c = 0; c < 6 * N; ++c) sum += localStiffness[r][c] * state.d[c];
     state.s[r] = sum;
     state.energy += 0.5 * sum * state.d[r];
   }
@@ -625,18 +635,20 @@ KOKKOS_INLINE_FUNCTION void shellLocalStrains(const double referencePositions[4]
 }
 
 // Internal force f = dW/dq = B^T K_l d (global translations, then spatial moments per
-// node); returns the element energy W = 1/2 d^T K_l d.
-KOKKOS_INLINE_FUNCTION double shellInternalForce(const double referencePositions[4][3], const double positions[4][3],
-                                                 const double rotations[4][3][3],
-                                                 const double localStiffness[shellDofCount][shellDofCount],
-                                                 double force[shellDofCount]) {
-  detail::ShellState state;
-  detail::evaluateState(referencePositions, positions, rotations, localStiffness, state);
-  for (int j = 0; j < shellDofCount; ++j) {
-    double column[shellDofCount];
-    detail::deformationalGradientColumn(state.reference, positions, rotations, state.frame, j, column);
+// node); returns the element energy W = 1/2 d^T K_l d. N = 4 for a quad; N = 3 for a
+// triangle (a b c c: referencePositions holds its 4 corners, positions and rotations its 3
+// nodes', localStiffness is the 18 x 18 block of its K_l, force has 18 entries).
+template <int N = 4>
+KOKKOS_INLINE_FUNCTION double shellInternalForce(const double referencePositions[4][3], const double positions[][3],
+                                                 const double rotations[][3][3], const double localStiffness[][6 * N],
+                                                 double force[]) {
+  detail::ShellState<N> state;
+  detail::evaluateState<N>(referencePositions, positions, rotations, localStiffness, state);
+  for (int j = 0; j < 6 * N; ++j) {
+    double column[6 * N];
+    detail::deformationalGradientColumn<N>(state.reference, positions, rotations, state.frame, j, column);
     double sum = 0.0;
-    for (int i = 0; i < shellDofCount; ++i) sum += state.s[i] * column[i];
+    for (int i = 0; i < 6 * N; ++i) sum += state.s[i] * column[i];
     force[j] = sum;
   }
   return state.energy;
@@ -645,35 +657,36 @@ KOKKOS_INLINE_FUNCTION double shellInternalForce(const double referencePositions
 // Internal force (as shellInternalForce) and the symmetric tangent K_T = d2W/dq2 =
 // B^T K_l B + sum_i (K_l d)_i d2 d_i/dq2 (paper K_L + K_S). K_T is the symmetric part of the
 // derivative of f under the multiplicative update R <- exp(dphi) R; addRotationAsymmetry
-// gives that derivative itself. Returns W.
-KOKKOS_INLINE_FUNCTION double shellTangent(const double referencePositions[4][3], const double positions[4][3],
-                                           const double rotations[4][3][3],
-                                           const double localStiffness[shellDofCount][shellDofCount],
-                                           double force[shellDofCount], double tangent[shellDofCount][shellDofCount]) {
-  detail::ShellState state;
-  detail::evaluateState(referencePositions, positions, rotations, localStiffness, state);
-  double columns[shellDofCount][shellDofCount];  // columns[j] = dd/dq_j
-  for (int j = 0; j < shellDofCount; ++j) {
-    detail::deformationalGradientColumn(state.reference, positions, rotations, state.frame, j, columns[j]);
+// gives that derivative itself. Returns W. N as for shellInternalForce.
+template <int N = 4>
+KOKKOS_INLINE_FUNCTION double shellTangent(const double referencePositions[4][3], const double positions[][3],
+                                           const double rotations[][3][3], const double localStiffness[][6 * N],
+                                           double force[], double tangent[][6 * N]) {
+  constexpr int dofs = 6 * N;
+  detail::ShellState<N> state;
+  detail::evaluateState<N>(referencePositions, positions, rotations, localStiffness, state);
+  double columns[dofs][dofs];  // columns[j] = dd/dq_j
+  for (int j = 0; j < dofs; ++j) {
+    detail::deformationalGradientColumn<N>(state.reference, positions, rotations, state.frame, j, columns[j]);
     double sum = 0.0;
-    for (int i = 0; i < shellDofCount; ++i) sum += state.s[i] * columns[j][i];
+    for (int i = 0; i < dofs; ++i) sum += state.s[i] * columns[j][i];
     force[j] = sum;
   }
-  for (int k = 0; k < shellDofCount; ++k) {
-    double stiffnessTimesColumn[shellDofCount];
-    for (int r = 0; r < shellDofCount; ++r) {
+  for (int k = 0; k < dofs; ++k) {
+    double stiffnessTimesColumn[dofs];
+    for (int r = 0; r < dofs; ++r) {
       double sum = 0.0;
-      for (int c = 0; c < shellDofCount; ++c) sum += localStiffness[r][c] * columns[k][c];
+      for (int c = 0; c < dofs; ++c) sum += localStiffness[r][c] * columns[k][c];
       stiffnessTimesColumn[r] = sum;
     }
     for (int j = 0; j <= k; ++j) {
       double sum = 0.0;
-      for (int i = 0; i < shellDofCount; ++i) sum += columns[j][i] * stiffnessTimesColumn[i];
+      for (int i = 0; i < dofs; ++i) sum += columns[j][i] * stiffnessTimesColumn[i];
       tangent[j][k] = sum;
       tangent[k][j] = sum;
     }
   }
-  detail::addInitialStressStiffness(state.reference, positions, rotations, state.frame, state.s, tangent);
+  detail::addInitialStressStiffness<N>(state.reference, positions, rotations, state.frame, state.s, tangent);
   return state.energy;
 }
 
@@ -681,9 +694,9 @@ KOKKOS_INLINE_FUNCTION double shellTangent(const double referencePositions[4][3]
 // (TangentForm::Exact, core/types.hpp): df_phi_a/dphi_a = K_T - 1/2 skew(m_a), m_a the
 // node's moment in f. Non-symmetric; summed over elements at equilibrium the term is
 // -1/2 skew(applied moment), so it vanishes where no moment is applied.
-KOKKOS_INLINE_FUNCTION void addRotationAsymmetry(const double force[shellDofCount],
-                                                 double tangent[shellDofCount][shellDofCount]) {
-  for (int a = 0; a < 4; ++a) {
+template <int N = 4>
+KOKKOS_INLINE_FUNCTION void addRotationAsymmetry(const double force[], double tangent[][6 * N]) {
+  for (int a = 0; a < N; ++a) {
     const int o = 6 * a + 3;
     const double m[3] = {force[o], force[o + 1], force[o + 2]};
     tangent[o][o + 1] += 0.5 * m[2];

@@ -77,6 +77,38 @@ KOKKOS_INLINE_FUNCTION void loadElement(const ShellBody<MemorySpaceT>& body, con
   }
 }
 
+// Subtracts the internal force of MITC element e (N = 4 a quad, N = 3 a triangle a b c c)
+// from its nodes' forces, and adds its energy, 1/N per node.
+template <int N, class MemorySpaceT>
+KOKKOS_INLINE_FUNCTION void subtractElementForce(const ShellBody<MemorySpaceT>& body, LocalIndex e,
+                                                 const double reference[4][3], const double current[4][3],
+                                                 const double rotations[4][3][3],
+                                                 const pd::NodalVectorView<MemorySpaceT>& forces,
+                                                 const VectorView<MemorySpaceT>& energy) {
+  double localStiffness[6 * N][6 * N], force[6 * N];
+  for (int r = 0; r < 6 * N; ++r)
+    for (int c = 0; c < 6 * N; ++c) localStiffness[r][c] = body.localStiffness(e, r, c);
+  const double elementEnergy = shellInternalForce<N>(reference, current, rotations, localStiffness, force);
+  for (int a = 0; a < N; ++a) {
+    for (int d = 0; d < 6; ++d) Kokkos::atomic_add(&forces(body.quads(e, a), d), -force[6 * a + d]);
+    if (energy.extent(0) > 0) Kokkos::atomic_add(&energy(body.quads(e, a)), elementEnergy / N);
+  }
+}
+
+// Adds the tangent of MITC element e (N as above) into the CRS values.
+template <int N, class MemorySpaceT, class PatternT>
+KOKKOS_INLINE_FUNCTION void addElementTangent(const ShellBody<MemorySpaceT>& body, LocalIndex e,
+                                              const double reference[4][3], const double current[4][3],
+                                              const double rotations[4][3][3], const PatternT& pattern,
+                                              const VectorView<MemorySpaceT>& values, TangentForm form) {
+  double localStiffness[6 * N][6 * N], force[6 * N], tangent[6 * N][6 * N];
+  for (int r = 0; r < 6 * N; ++r)
+    for (int c = 0; c < 6 * N; ++c) localStiffness[r][c] = body.localStiffness(e, r, c);
+  shellTangent<N>(reference, current, rotations, localStiffness, force, tangent);
+  if (form == TangentForm::Exact) addRotationAsymmetry<N>(force, tangent);
+  pattern.template atomicAddElementMatrix<N>(e, tangent, values);
+}
+
 }  // namespace detail
 
 // The CCM elements of a mesh (body element k is mesh element ccmElements[k]) with their
@@ -227,15 +259,13 @@ void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpa
   Kokkos::parallel_for(
       "perishell::shell::subtractShellForces", queuedRangePolicy(space, 0, body.numElements()),
       KOKKOS_LAMBDA(const LocalIndex e) {
-        double reference[4][3], current[4][3], rotations[4][3][3], localStiffness[24][24], force[24];
+        double reference[4][3], current[4][3], rotations[4][3][3];
         detail::loadElement(body, state, e, reference, current, rotations);
-        for (int r = 0; r < 24; ++r)
-          for (int s = 0; s < 24; ++s) localStiffness[r][s] = body.localStiffness(e, r, s);
-        const double elementEnergy = shellInternalForce(reference, current, rotations, localStiffness, force);
-        for (int a = 0; a < 4; ++a) {
-          for (int d = 0; d < 6; ++d) Kokkos::atomic_add(&forces(body.quads(e, a), d), -force[6 * a + d]);
-          if (withEnergy) Kokkos::atomic_add(&energy(body.quads(e, a)), 0.25 * elementEnergy);
-        }
+        // A triangle works on its 3 nodes: 18 DOF, not the collapsed quad's 24.
+        if (mesh::isTriangle(body.quads, e))
+          detail::subtractElementForce<3>(body, e, reference, current, rotations, forces, energy);
+        else
+          detail::subtractElementForce<4>(body, e, reference, current, rotations, forces, energy);
       });
 }
 
@@ -285,13 +315,12 @@ void assembleShellTangent(const ExecutionSpaceT& space, const ShellBody<MemorySp
   Kokkos::parallel_for(
       "perishell::shell::assembleShellTangent", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numElements()),
       KOKKOS_LAMBDA(const LocalIndex e) {
-        double reference[4][3], current[4][3], rotations[4][3][3], localStiffness[24][24], force[24], tangent[24][24];
+        double reference[4][3], current[4][3], rotations[4][3][3];
         detail::loadElement(body, state, e, reference, current, rotations);
-        for (int r = 0; r < 24; ++r)
-          for (int s = 0; s < 24; ++s) localStiffness[r][s] = body.localStiffness(e, r, s);
-        shellTangent(reference, current, rotations, localStiffness, force, tangent);
-        if (form == TangentForm::Exact) addRotationAsymmetry(force, tangent);
-        pattern.atomicAddElementMatrix(e, tangent, values);
+        if (mesh::isTriangle(body.quads, e))
+          detail::addElementTangent<3>(body, e, reference, current, rotations, pattern, values, form);
+        else
+          detail::addElementTangent<4>(body, e, reference, current, rotations, pattern, values, form);
       });
 }
 
