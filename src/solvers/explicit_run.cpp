@@ -300,11 +300,7 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   const double setupSeconds = fencedSecondsSince(space, setupStart);
   log << "explicit: " << bodies.pdNodes.extent(0) << " PD nodes, " << body.bonds.numBonds() << " bonds, "
       << solver.numElements() << " shell elements ("
-      << (bodies.shellBody.kind == shell::ShellElementKind::OnePoint ? "one-point"
-          : settings.shellElement == deck::ExplicitSettings::ShellElement::OnePoint
-              ? "MITC4, MITC3 on triangles: the one-point element takes quads only"
-              : "MITC4")
-      << ") on "
+      << (settings.shellElement == deck::ExplicitSettings::ShellElement::OnePoint ? "one-point" : "MITC4") << ") on "
       << ExecutionSpaceT::name() << "; dt = " << solver.timeStep() << " s (critical estimate "
       << solver.criticalTimeStep() << " s), " << totalSteps << " steps to t = " << totalSteps * solver.timeStep()
       << " s; setup " << formatSeconds(setupSeconds) << "\n";

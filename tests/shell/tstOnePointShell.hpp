@@ -3,9 +3,11 @@
 // size cost nothing, the force turns with the element, membrane and bending patch tests on
 // the distorted MacNeal-Harder patch are exact, a thin cantilever does not lock, hourglass
 // modes are resisted while linear fields are not, the nodal stiffness diagonal matches the
-// Hessian's, the device gives the host's numbers, and warped elements are refused.
+// Hessian's, the device gives the host's numbers, and warped elements are refused. The
+// explicit triangle (shell/explicit_triangle.hpp) gives the MITC3 triangle's force and energy.
 #include <perishell/core/dual.hpp>
 #include <perishell/core/types.hpp>
+#include <perishell/shell/explicit_triangle.hpp>
 #include <perishell/shell/one_point_shell.hpp>
 #include <shell/element_states.hpp>
 
@@ -293,6 +295,42 @@ TEST(TEST_CATEGORY, one_point_device_evaluation_matches_host) {
     EXPECT_NEAR(device(e, dofs), energies.strain, 1e-12 * std::max(energies.strain, forceScale * 1e-12));
     EXPECT_NEAR(device(e, dofs + 1), energies.hourglass, 1e-12 * std::max(energies.hourglass, forceScale * 1e-12));
   }
+}
+
+TEST(TEST_CATEGORY, explicit_triangle_force_is_the_mitc3_triangles) {
+  // The written-out force of the explicit triangle and the stored-K_l force of the implicit
+  // solver's triangle (shell/mitc4_shell.hpp, N = 3) are the derivative of one energy; also for
+  // a scaled section and a triangle with one linear (quad-side) edge, and after a rigid motion.
+  const double X[4][3] = {{0.0, 0.0, 0.0}, {1.1, 0.1, 0.3}, {0.2, 0.9, -0.2}, {0.2, 0.9, -0.2}};
+  ElementState state = stronglyDeformed();
+  for (int a = 0; a < 4; ++a)
+    for (int k = 0; k < 3; ++k) state.reference[a][k] = X[a][k];
+  const shell::ShellSection section = thickSection();
+  const double forceScale = section.youngModulus * section.thickness;
+  for (const unsigned edges : {7u, 5u})
+    for (const double scale : {1.0, 0.4}) {
+      const double fullScales[4] = {scale, scale, scale, scale};
+      double K4[dofs][dofs], K3[18][18], stored[18], written[18];
+      shell::shellLocalStiffness(X, section, fullScales, edges, K4);
+      for (int r = 0; r < 18; ++r)
+        for (int c = 0; c < 18; ++c) K3[r][c] = K4[r][c];
+      const double storedEnergy = shell::shellInternalForce<3>(X, state.positions, state.rotations, K3, stored);
+      const double writtenEnergy =
+          shell::explicitTriangleForce(X, state.positions, state.rotations, section, scale, edges, written);
+      EXPECT_GT(storedEnergy, 0.0);
+      EXPECT_NEAR(writtenEnergy, storedEnergy, 1e-12 * storedEnergy) << "edges " << edges << " scale " << scale;
+      double error = 0.0;
+      for (int i = 0; i < 18; ++i) error = std::max(error, std::abs(written[i] - stored[i]));
+      std::cout << "explicit triangle, edges " << edges << ", scale " << scale << ": energy " << writtenEnergy
+                << ", max force difference / (E t) " << error / forceScale << "\n";
+      EXPECT_LE(error, 1e-10 * forceScale);
+    }
+  // A rigid motion of the reference costs nothing.
+  const double turn[3] = {0.3, -1.1, 0.7}, shift[3] = {0.3, -1.2, 2.0};
+  const ElementState moved = rigidlyMoved(X, turn, shift);
+  double rigid[18];
+  EXPECT_LE(shell::explicitTriangleForce(X, moved.positions, moved.rotations, section, 1.0, 7u, rigid), 1e-20 * forceScale);
+  for (int i = 0; i < 18; ++i) EXPECT_LE(std::abs(rigid[i]), 1e-10 * forceScale) << i;
 }
 
 TEST(TEST_CATEGORY, one_point_warped_and_degenerate_elements_are_refused) {

@@ -167,13 +167,8 @@ inline CouplingInputs couplingInputs(const model::Model& model) {
   if (model.deck.solver.type == deck::SolverType::Explicit) {
     const auto& settings = model.deck.solver.explicitSettings;
     using ShellElement = deck::ExplicitSettings::ShellElement;
-    // The one-point element takes quads only: a mesh with triangles gets MITC4 and MITC3.
-    const auto& mesh = model.shell.mesh;
-    bool hasTriangles = false;
-    for (LocalIndex e = 0; e < mesh.numElements() && !hasTriangles; ++e) hasTriangles = mesh::isTriangle(mesh.quads, e);
-    inputs.shellElement = settings.shellElement == ShellElement::OnePoint && !hasTriangles
-                              ? shell::ShellElementKind::OnePoint
-                              : shell::ShellElementKind::Mitc4;
+    inputs.shellElement = settings.shellElement == ShellElement::OnePoint ? shell::ShellElementKind::OnePoint
+                                                                          : shell::ShellElementKind::Mitc4;
     inputs.section.hourglassCoefficient = settings.hourglassCoefficient;
   }
   return inputs;

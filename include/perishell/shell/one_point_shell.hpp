@@ -35,6 +35,7 @@
 // the element's four Gauss-point factors, i.e. 1 - alphaBar at the centre, which
 // integrates (1 - alphaBar(x)) W exactly on parallelogram elements, as 2x2 Gauss does.
 // DOF order and conventions are the MITC4 element's.
+#include <perishell/shell/corotational_projector.hpp>
 #include <perishell/shell/mitc4_shell.hpp>
 
 #include <algorithm>
@@ -135,13 +136,10 @@ KOKKOS_INLINE_FUNCTION OnePointReference onePointReference(const double referenc
 }
 
 // Rejects what a flat one-point element cannot represent: what checkShellElement rejects,
-// a triangle, and a warp above maxOnePointWarp. `element` names it in the message.
+// and a warp above maxOnePointWarp (a triangle is flat). `element` names it in the message.
 inline void checkOnePointShellElement(const double referencePositions[4][3], long element) {
   checkShellElement(referencePositions, element);
-  if (isTriangleElement(referencePositions))
-    throw std::invalid_argument("shell element " + std::to_string(element) +
-                                ": a triangle; the explicit one-point shell takes quads only (set "
-                                "solver.shell-element: mitc4, whose triangles are MITC3)");
+  if (isTriangleElement(referencePositions)) return;  // flat; shell/explicit_triangle.hpp
   const OnePointReference r = onePointReference(referencePositions);
   double warp = 0.0;
   for (int a = 0; a < 4; ++a) warp = std::max(warp, std::abs(r.geometry.local[a][2]));
@@ -269,26 +267,6 @@ KOKKOS_INLINE_FUNCTION void onePointDeformation(const OnePointReference& r, cons
   }
 }
 
-// d log(exp(delta) Q) / d delta = J_l^-1(theta), the inverse left Jacobian of SO(3):
-// I - 1/2 [theta] + c [theta]^2, c = 1/theta^2 - (1 + cos theta)/(2 theta sin theta).
-KOKKOS_INLINE_FUNCTION void inverseLeftJacobian(const double theta[3], double J[3][3]) {
-  const double angleSquared = theta[0] * theta[0] + theta[1] * theta[1] + theta[2] * theta[2];
-  double c;
-  if (angleSquared < 1e-4) {
-    c = 1.0 / 12.0 + angleSquared * (1.0 / 720.0 + angleSquared / 30240.0);
-  } else {
-    const double angle = Kokkos::Experimental::sqrt(angleSquared);
-    c = 1.0 / angleSquared -
-        (1.0 + Kokkos::Experimental::cos(angle)) / (2.0 * angle * Kokkos::Experimental::sin(angle));
-  }
-  const double skew[3][3] = {{0.0, -theta[2], theta[1]}, {theta[2], 0.0, -theta[0]}, {-theta[1], theta[0], 0.0}};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) {
-      const double square = skew[i][0] * skew[0][j] + skew[i][1] * skew[1][j] + skew[i][2] * skew[2][j];
-      J[i][j] = (i == j ? 1.0 : 0.0) - 0.5 * skew[i][j] + c * square;
-    }
-}
-
 }  // namespace detail
 
 // The element's energy for any scalar type (the tests differentiate it with core/dual.hpp
@@ -360,59 +338,24 @@ KOKKOS_INLINE_FUNCTION OnePointEnergies onePointShellForce(const double referenc
                            m[1] * curvature[1] + m[2] * curvature[2] + shearWork + z * drilling) +
                     stabilisation;
 
-  // Global forces of the local ones with the frame held fixed, F_a = E^T f_a and
-  // M_a = E^T J^-T f_theta_a, and their total moment about the centroid.
-  double moment[3] = {0.0, 0.0, 0.0}, forceSum[3] = {0.0, 0.0, 0.0};
+  // dW/dd per node (the local forces), then mapped to the global DOF through the derivative
+  // of d (shell/corotational_projector.hpp).
+  double local[4][6];
   for (int a = 0; a < 4; ++a) {
     const double bx = r.dNdx[a], by = r.dNdy[a], g = r.hourglass[a];
-    double local[6] = {bx * n[0] + by * n[2] + 0.5 * by * z + g * hourglassForce[0],
-                       by * n[1] + bx * n[2] - 0.5 * bx * z + g * hourglassForce[1],
-                       0.0,
-                       -by * m[1] - bx * m[2] + g * hourglassForce[2],
-                       bx * m[0] + by * m[2] + g * hourglassForce[3],
-                       0.25 * z + g * hourglassForce[4]};
+    local[a][0] = bx * n[0] + by * n[2] + 0.5 * by * z + g * hourglassForce[0];
+    local[a][1] = by * n[1] + bx * n[2] - 0.5 * bx * z + g * hourglassForce[1];
+    local[a][2] = 0.0;
+    local[a][3] = -by * m[1] - bx * m[2] + g * hourglassForce[2];
+    local[a][4] = bx * m[0] + by * m[2] + g * hourglassForce[3];
+    local[a][5] = 0.25 * z + g * hourglassForce[4];
     for (int i = 0; i < 4; ++i) {
-      local[2] += r.shearW[a][i] * q[i];
-      local[3] += r.shearThetaX[a][i] * q[i];
-      local[4] += r.shearThetaY[a][i] * q[i];
+      local[a][2] += r.shearW[a][i] * q[i];
+      local[a][3] += r.shearThetaX[a][i] * q[i];
+      local[a][4] += r.shearThetaY[a][i] * q[i];
     }
-    double J[3][3], rotational[3];
-    detail::inverseLeftJacobian(&d[6 * a + 3], J);
-    for (int j = 0; j < 3; ++j) rotational[j] = J[0][j] * local[3] + J[1][j] * local[4] + J[2][j] * local[5];
-    for (int k = 0; k < 3; ++k) {
-      force[6 * a + k] = E[0][k] * local[0] + E[1][k] * local[1] + E[2][k] * local[2];
-      force[6 * a + 3 + k] = E[0][k] * rotational[0] + E[1][k] * rotational[1] + E[2][k] * rotational[2];
-      moment[k] += force[6 * a + 3 + k];
-      forceSum[k] += force[6 * a + k];
-    }
-    const double arm[3] = {positions[a][0] - centroid[0], positions[a][1] - centroid[1], positions[a][2] - centroid[2]};
-    double armMoment[3];
-    rotation::cross(arm, &force[6 * a], armMoment);
-    for (int k = 0; k < 3; ++k) moment[k] += armMoment[k];
   }
-  // The frame turns with the nodes (omega = sum_b G_b dx_b): f_x_b -= G_b^T moment, written
-  // through the diagonals and the edge sum that define the frame (docs/explicit.md), and the
-  // centroid moves with them (f_x_b -= forceSum / 4, zero up to round-off).
-  double mu[3];
-  for (int i = 0; i < 3; ++i) mu[i] = E[i][0] * moment[0] + E[i][1] * moment[1] + E[i][2] * moment[2];
-  const double normalSpin = mu[0] + mu[2] * lengths.alongNormal / lengths.along;
-  double lever[3], diagonal13[3], diagonal24[3], toDiagonal13[3], toDiagonal24[3];
-  for (int k = 0; k < 3; ++k) {
-    lever[k] = mu[1] * E[0][k] - normalSpin * E[1][k];
-    diagonal13[k] = positions[2][k] - positions[0][k];
-    diagonal24[k] = positions[3][k] - positions[1][k];
-  }
-  rotation::cross(diagonal24, lever, toDiagonal13);
-  rotation::cross(lever, diagonal13, toDiagonal24);
-  for (int k = 0; k < 3; ++k) {
-    const double g13 = toDiagonal13[k] / lengths.normal, g24 = toDiagonal24[k] / lengths.normal;
-    const double gAlong = mu[2] / lengths.along * E[1][k];
-    const double shift = 0.25 * forceSum[k];
-    force[k] += g13 + gAlong - shift;
-    force[6 + k] += g24 - gAlong - shift;
-    force[12 + k] += -g13 - gAlong - shift;
-    force[18 + k] += -g24 + gAlong - shift;
-  }
+  detail::projectLocalForces<4>(E, centroid, lengths, positions, d, local, force);
   return energies;
 }
 

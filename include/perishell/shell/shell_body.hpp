@@ -6,6 +6,7 @@
 // (the explicit solver's default).
 #include <perishell/mesh/quad_mesh.hpp>
 #include <perishell/pd/pd_body.hpp>
+#include <perishell/shell/explicit_triangle.hpp>
 #include <perishell/shell/mitc4_shell.hpp>
 #include <perishell/shell/one_point_shell.hpp>
 
@@ -17,7 +18,9 @@ namespace perishell::shell {
 
 // Which element the CCM part uses: the MITC4 element (shell/mitc4_shell.hpp; both solvers;
 // its 24 x 24 K_l cached per element) or the one-point element (shell/one_point_shell.hpp;
-// explicit only; nothing cached).
+// explicit only; nothing cached). Triangles of either kind are shell/mitc3_triangle.hpp's:
+// from the cached K_l (Mitc4), or with forces written out (OnePoint,
+// shell/explicit_triangle.hpp).
 enum class ShellElementKind { Mitc4, OnePoint };
 
 // How the one-point element's forces reach the nodes: Scatter, one thread per element adding
@@ -45,6 +48,8 @@ struct ShellBody {
   Kokkos::View<RowOffset*, MemorySpaceT> nodeElementOffsets;
   Kokkos::View<LocalIndex*, MemorySpaceT> nodeElementEntries;
   Kokkos::View<double* [26], Kokkos::LayoutRight, MemorySpaceT> elementForces;
+  // One-point only: per element, the triangle's edges with Allman's term (triangleQuadraticEdges).
+  Kokkos::View<unsigned*, MemorySpaceT> quadraticEdges;
 
   LocalIndex numElements() const { return static_cast<LocalIndex>(quads.extent(0)); }
 };
@@ -151,26 +156,29 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
   body.referencePositions = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, mesh.coordinates);
   body.quads = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, quads);
   body.membraneBendingScale = membraneBendingScale;
-  if (kind == ShellElementKind::OnePoint) {
-    Kokkos::View<RowOffset*, Kokkos::HostSpace> offsets("shell node element offsets", mesh.numNodes() + 1);
-    for (std::size_t k = 0; k < quads.extent(0); ++k)
-      for (int a = 0; a < 4; ++a) ++offsets(quads(k, a) + 1);
-    for (LocalIndex node = 0; node < mesh.numNodes(); ++node) offsets(node + 1) += offsets(node);
-    Kokkos::View<LocalIndex*, Kokkos::HostSpace> entries("shell node element entries", 4 * quads.extent(0));
-    std::vector<RowOffset> next(offsets.data(), offsets.data() + mesh.numNodes());
-    for (std::size_t k = 0; k < quads.extent(0); ++k)
-      for (int a = 0; a < 4; ++a) entries(next[quads(k, a)]++) = static_cast<LocalIndex>(4 * k + a);
-    body.nodeElementOffsets = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, offsets);
-    body.nodeElementEntries = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, entries);
-    body.elementForces = decltype(body.elementForces)("shell element forces", quads.extent(0));
-    body.assembly = defaultElementForceAssembly<ExecutionSpaceT>();
-    return body;
-  }
-  body.localStiffness = decltype(body.localStiffness)("shell local stiffness", ccmElements.size());
   const std::vector<unsigned> hostEdges = triangleQuadraticEdges(quads, quads.extent(0));
   Kokkos::View<unsigned*, Kokkos::HostSpace> hostEdgeView("shell triangle quadratic edges", hostEdges.size());
   for (std::size_t k = 0; k < hostEdges.size(); ++k) hostEdgeView(k) = hostEdges[k];
   const auto quadraticEdges = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostEdgeView);
+  if (kind == ShellElementKind::OnePoint) {
+    // Incidence over each element's distinct corners (a triangle's node 2 once).
+    Kokkos::View<RowOffset*, Kokkos::HostSpace> offsets("shell node element offsets", mesh.numNodes() + 1);
+    for (std::size_t k = 0; k < quads.extent(0); ++k)
+      for (int a = 0; a < mesh::cornerCount(quads, k); ++a) ++offsets(quads(k, a) + 1);
+    for (LocalIndex node = 0; node < mesh.numNodes(); ++node) offsets(node + 1) += offsets(node);
+    Kokkos::View<LocalIndex*, Kokkos::HostSpace> entries("shell node element entries", offsets(mesh.numNodes()));
+    std::vector<RowOffset> next(offsets.data(), offsets.data() + mesh.numNodes());
+    for (std::size_t k = 0; k < quads.extent(0); ++k)
+      for (int a = 0; a < mesh::cornerCount(quads, k); ++a)
+        entries(next[quads(k, a)]++) = static_cast<LocalIndex>(4 * k + a);
+    body.nodeElementOffsets = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, offsets);
+    body.nodeElementEntries = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, entries);
+    body.elementForces = decltype(body.elementForces)("shell element forces", quads.extent(0));
+    body.assembly = defaultElementForceAssembly<ExecutionSpaceT>();
+    body.quadraticEdges = quadraticEdges;
+    return body;
+  }
+  body.localStiffness = decltype(body.localStiffness)("shell local stiffness", ccmElements.size());
   const auto b = body;
   Kokkos::parallel_for(
       "perishell::shell::localStiffness", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, b.numElements()),
@@ -202,7 +210,7 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(const ExecutionS
 
 // forces -= internal forces of every element (the caller's forces are the loads acting on
 // the nodes, so the result is the out-of-balance force). With a non-empty energy view, each
-// element's energy (MITC4: W = 1/2 d^T K_l d) is also added to it, a quarter per node, and
+// element's energy (MITC4: W = 1/2 d^T K_l d) is also added to it, in equal shares per node, and
 // with a non-empty hourglassEnergy view the one-point element's hourglass part likewise.
 template <class ExecutionSpaceT, class MemorySpaceT>
 void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
@@ -221,19 +229,25 @@ void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpa
           detail::loadElement(body, state, e, reference, current, rotations);
           const double scale = 0.25 * (body.membraneBendingScale(e, 0) + body.membraneBendingScale(e, 1) +
                                        body.membraneBendingScale(e, 2) + body.membraneBendingScale(e, 3));
-          const OnePointEnergies elementEnergy =
-              onePointShellForce(reference, current, rotations, body.section, scale, force);
+          const int corners = mesh::cornerCount(body.quads, e);
+          OnePointEnergies elementEnergy{0.0, 0.0};
+          if (corners == 3)
+            elementEnergy.strain = explicitTriangleForce(reference, current, rotations, body.section, scale,
+                                                         body.quadraticEdges(e), force);
+          else
+            elementEnergy = onePointShellForce(reference, current, rotations, body.section, scale, force);
+          // Energies go to the nodes in equal shares.
           if (gather) {
-            for (int r = 0; r < shellDofCount; ++r) body.elementForces(e, r) = force[r];
-            body.elementForces(e, 24) = elementEnergy.strain;
-            body.elementForces(e, 25) = elementEnergy.hourglass;
+            for (int r = 0; r < 6 * corners; ++r) body.elementForces(e, r) = force[r];
+            body.elementForces(e, 24) = elementEnergy.strain / corners;
+            body.elementForces(e, 25) = elementEnergy.hourglass / corners;
             return;
           }
-          for (int a = 0; a < 4; ++a) {
+          for (int a = 0; a < corners; ++a) {
             const LocalIndex node = body.quads(e, a);
             for (int d = 0; d < 6; ++d) Kokkos::atomic_add(&forces(node, d), -force[6 * a + d]);
-            if (withEnergy) Kokkos::atomic_add(&energy(node), 0.25 * elementEnergy.strain);
-            if (withHourglass) Kokkos::atomic_add(&hourglassEnergy(node), 0.25 * elementEnergy.hourglass);
+            if (withEnergy) Kokkos::atomic_add(&energy(node), elementEnergy.strain / corners);
+            if (withHourglass) Kokkos::atomic_add(&hourglassEnergy(node), elementEnergy.hourglass / corners);
           }
         });
     if (!gather) return;
@@ -251,8 +265,8 @@ void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpa
             hourglass += body.elementForces(e, 25);
           }
           for (int d = 0; d < 6; ++d) forces(node, d) -= sum[d];
-          if (withEnergy) energy(node) += 0.25 * strain;
-          if (withHourglass) hourglassEnergy(node) += 0.25 * hourglass;
+          if (withEnergy) energy(node) += strain;
+          if (withHourglass) hourglassEnergy(node) += hourglass;
         });
     return;
   }
@@ -282,7 +296,21 @@ void addShellNodalStiffness(const ExecutionSpaceT& space, const ShellBody<Memory
       "perishell::shell::addShellNodalStiffness", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numElements()),
       KOKKOS_LAMBDA(const LocalIndex e) {
         double moving[4] = {0.0, 0.0, 0.0, 0.0}, turning[4] = {0.0, 0.0, 0.0, 0.0};
-        if (onePoint) {
+        const int corners = mesh::cornerCount(body.quads, e);
+        if (onePoint && corners == 3) {
+          double reference[4][3], local[3][2], K[triangleDofCount][triangleDofCount];
+          for (int a = 0; a < 4; ++a)
+            for (int d = 0; d < 3; ++d) reference[a][d] = body.referencePositions(body.quads(e, a), d);
+          detail::triangleCorners(shellReference(reference), local);
+          const double scale = 0.25 * (body.membraneBendingScale(e, 0) + body.membraneBendingScale(e, 1) +
+                                       body.membraneBendingScale(e, 2) + body.membraneBendingScale(e, 3));
+          triangleLocalStiffness(local, body.section, scale, body.quadraticEdges(e), K);
+          for (int a = 0; a < 3; ++a)
+            for (int d = 0; d < 3; ++d) {
+              moving[a] += K[6 * a + d][6 * a + d] / 3.0;
+              turning[a] += K[6 * a + 3 + d][6 * a + 3 + d] / 3.0;
+            }
+        } else if (onePoint) {
           double reference[4][3];
           for (int a = 0; a < 4; ++a)
             for (int d = 0; d < 3; ++d) reference[a][d] = body.referencePositions(body.quads(e, a), d);
@@ -296,7 +324,7 @@ void addShellNodalStiffness(const ExecutionSpaceT& space, const ShellBody<Memory
               turning[a] += body.localStiffness(e, 6 * a + 3 + d, 6 * a + 3 + d) / 3.0;
             }
         }
-        for (int a = 0; a < 4; ++a) {
+        for (int a = 0; a < corners; ++a) {
           Kokkos::atomic_add(&translational(body.quads(e, a)), moving[a]);
           Kokkos::atomic_add(&rotational(body.quads(e, a)), turning[a]);
         }

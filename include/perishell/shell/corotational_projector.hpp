@@ -1,0 +1,83 @@
+#pragma once
+// The corotational projector of the explicit shell elements (docs/explicit.md, "The explicit
+// shell element"): global nodal forces f = dW/dq from the local ones dW/dd, for the
+// deformational DOF d of shell/mitc4_shell.hpp (local translations E (x_a - x_c) - X_a and
+// rotations log(E R_a E0^T)), the frame E built from the diagonals and the edge sum. Exact:
+// it is the chain rule through d, the frame's spin included, written out so that no
+// stiffness matrix and no automatic differentiation is needed. N = 4 for a quad, N = 3 for a
+// triangle (the quad a b c c: node 3's part of the frame's derivative goes to node 2).
+#include <perishell/shell/mitc4_shell.hpp>
+
+namespace perishell::shell::detail {
+
+// d log(exp(delta) Q) / d delta = J_l^-1(theta), the inverse left Jacobian of SO(3):
+// I - 1/2 [theta] + c [theta]^2, c = 1/theta^2 - (1 + cos theta)/(2 theta sin theta).
+KOKKOS_INLINE_FUNCTION void inverseLeftJacobian(const double theta[3], double J[3][3]) {
+  const double angleSquared = theta[0] * theta[0] + theta[1] * theta[1] + theta[2] * theta[2];
+  double c;
+  if (angleSquared < 1e-4) {
+    c = 1.0 / 12.0 + angleSquared * (1.0 / 720.0 + angleSquared / 30240.0);
+  } else {
+    const double angle = Kokkos::Experimental::sqrt(angleSquared);
+    c = 1.0 / angleSquared -
+        (1.0 + Kokkos::Experimental::cos(angle)) / (2.0 * angle * Kokkos::Experimental::sin(angle));
+  }
+  const double skew[3][3] = {{0.0, -theta[2], theta[1]}, {theta[2], 0.0, -theta[0]}, {-theta[1], theta[0], 0.0}};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double square = skew[i][0] * skew[0][j] + skew[i][1] * skew[1][j] + skew[i][2] * skew[2][j];
+      J[i][j] = (i == j ? 1.0 : 0.0) - 0.5 * skew[i][j] + c * square;
+    }
+}
+
+// force (6 N entries) = dW/dq from local[a] = dW/dd_a (u v w theta_x theta_y theta_z of node
+// a), for the frame E (rows), centroid and lengths of corotationalFrame<N>(positions), and d.
+template <int N>
+KOKKOS_INLINE_FUNCTION void projectLocalForces(const double E[3][3], const double centroid[3],
+                                               const FrameLengths<double>& lengths, const double positions[][3],
+                                               const double d[], const double local[][6], double force[]) {
+  // Global forces of the local ones with the frame held fixed, F_a = E^T f_a and
+  // M_a = E^T J^-T f_theta_a, and their total moment about the centroid.
+  double moment[3] = {0.0, 0.0, 0.0}, forceSum[3] = {0.0, 0.0, 0.0};
+  for (int a = 0; a < N; ++a) {
+    double J[3][3], rotational[3];
+    inverseLeftJacobian(&d[6 * a + 3], J);
+    for (int j = 0; j < 3; ++j) rotational[j] = J[0][j] * local[a][3] + J[1][j] * local[a][4] + J[2][j] * local[a][5];
+    for (int k = 0; k < 3; ++k) {
+      force[6 * a + k] = E[0][k] * local[a][0] + E[1][k] * local[a][1] + E[2][k] * local[a][2];
+      force[6 * a + 3 + k] = E[0][k] * rotational[0] + E[1][k] * rotational[1] + E[2][k] * rotational[2];
+      moment[k] += force[6 * a + 3 + k];
+      forceSum[k] += force[6 * a + k];
+    }
+    const double arm[3] = {positions[a][0] - centroid[0], positions[a][1] - centroid[1], positions[a][2] - centroid[2]};
+    double armMoment[3];
+    rotation::cross(arm, &force[6 * a], armMoment);
+    for (int k = 0; k < 3; ++k) moment[k] += armMoment[k];
+  }
+  // The frame turns with the nodes (omega = sum_b G_b dx_b): f_x_b -= G_b^T moment, written
+  // through the diagonals and the edge sum that define the frame (docs/explicit.md), and the
+  // centroid moves with them (f_x_b -= forceSum / 4, zero up to round-off).
+  const double* last = positions[N - 1];
+  double mu[3];
+  for (int i = 0; i < 3; ++i) mu[i] = E[i][0] * moment[0] + E[i][1] * moment[1] + E[i][2] * moment[2];
+  const double normalSpin = mu[0] + mu[2] * lengths.alongNormal / lengths.along;
+  double lever[3], diagonal13[3], diagonal24[3], toDiagonal13[3], toDiagonal24[3];
+  for (int k = 0; k < 3; ++k) {
+    lever[k] = mu[1] * E[0][k] - normalSpin * E[1][k];
+    diagonal13[k] = positions[2][k] - positions[0][k];
+    diagonal24[k] = last[k] - positions[1][k];
+  }
+  rotation::cross(diagonal24, lever, toDiagonal13);
+  rotation::cross(lever, diagonal13, toDiagonal24);
+  for (int k = 0; k < 3; ++k) {
+    const double g13 = toDiagonal13[k] / lengths.normal, g24 = toDiagonal24[k] / lengths.normal;
+    const double gAlong = mu[2] / lengths.along * E[1][k];
+    const double shift = 0.25 * forceSum[k];
+    force[k] += g13 + gAlong - shift;
+    force[6 + k] += g24 - gAlong - shift;
+    force[12 + k] += -g13 - gAlong - shift;
+    force[6 * (N - 1) + k] += -g24 + gAlong - shift;  // node 3, or node 2 of a triangle
+  }
+}
+
+}  // namespace perishell::shell::detail
