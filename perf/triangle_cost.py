@@ -11,7 +11,7 @@ element work (internal forces + tangent assembly) and whole solve (total less se
 output), the explicit run's steps; each per node (and per increment or step).
 
   perf/triangle_cost.py --app build/openmp/apps/perishell --out OUT [--cells 100] [--steps 500]
-                        [--repeats 3] [--backend host|device]
+                        [--repeats 3] [--backend host|device] [--solvers implicit,explicit]
 
 Writes OUT/triangle_cost.md.
 """
@@ -100,6 +100,7 @@ def main():
     parser.add_argument("--steps", type=int, default=500)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--backend", default="host", choices=["device", "host"])
+    parser.add_argument("--solvers", default="implicit,explicit", help="which runs: implicit, explicit or both")
     args = parser.parse_args()
     n, nodes = args.cells, (args.cells + 1) ** 2
     implicit = "{type: implicit, increments: 2, preconditioner: cholesky}"
@@ -109,6 +110,7 @@ def main():
             ("explicit one-point", "triangles", True, explicit("one-point")),
             ("explicit mitc4", "quads", False, explicit("mitc4")),
             ("explicit mitc4", "triangles", True, explicit("mitc4"))]
+    runs = [r for r in runs if r[0].split()[0] in args.solvers.split(",")]
     rows = []
     for solver, meshing, triangles, settings in runs:
         directory = os.path.join(args.out, f"{solver.replace(' ', '-')}-{meshing}")
