@@ -107,19 +107,21 @@ Benchmark scordelisLoWholeRoof(int n) {
 // Pinched hemisphere with an 18-degree hole: R 10, t 0.04, E 6.825e7, nu 0.3, radial forces 2
 // (alternately out and in) at four points of the equator. A quarter with symmetry planes, the
 // force halved on each plane's point. Reference: the radial displacement at the forces, 0.094.
-Benchmark pinchedHemisphere(int n) {
+// `split` as for scordelisLoRoof.
+Benchmark pinchedHemisphere(int n, std::function<bool(int, int)> split = {}, const std::string& meshing = "") {
   const double hole = 18.0 * pi / 180.0;
   perishell_test::StructuredGmshGrid grid(n, n, [hole](double a, double b) {
     const double polar = hole + a * (0.5 * pi - hole), azimuth = 0.5 * pi * b;
     return std::array<double, 3>{10.0 * std::sin(polar) * std::cos(azimuth), 10.0 * std::sin(polar) * std::sin(azimuth),
                                  10.0 * std::cos(polar)};
   });
+  if (split) grid.splitIntoTriangles(split);
   grid.addLine("y0", 0, 0, n, 0);
   grid.addLine("x0", 0, n, n, n);
   grid.addPoint("A", n, 0);
   grid.addPoint("B", n, n);
   grid.addPoint("pin", 0, 0);
-  return {"pinched hemisphere " + std::to_string(n) + "x" + std::to_string(n), grid,
+  return {"pinched hemisphere " + std::to_string(n) + "x" + std::to_string(n) + meshing, grid,
           "{young-modulus: 6.825e7, poisson-ratio: 0.3, density: 1.0, thickness: 0.04}",
           "  supports:\n"
           "    symmetryY: {set: y0, dofs: [uy, rx, rz]}\n"
