@@ -253,8 +253,10 @@ KOKKOS_INLINE_FUNCTION double shellStrainDisplacement(const ShellReference& refe
 }
 
 // B at the element's centre (quad: xi = eta = 0; triangle: its centroid), in the quad's layout.
+// quadraticEdges: a triangle's edges with Allman's term (triangleQuadraticEdges), as its K_l.
 KOKKOS_INLINE_FUNCTION void shellCentreStrainDisplacement(const ShellReference& reference,
-                                                          double B[shellStrainCount][shellDofCount]) {
+                                                          double B[shellStrainCount][shellDofCount],
+                                                          unsigned quadraticEdges = allQuadraticEdges) {
   const auto& x = reference.local;
   if (!(x[3][0] == x[2][0] && x[3][1] == x[2][1] && x[3][2] == x[2][2])) {
     shellStrainDisplacement(reference, 0.0, 0.0, B);
@@ -262,7 +264,7 @@ KOKKOS_INLINE_FUNCTION void shellCentreStrainDisplacement(const ShellReference& 
   }
   double corners[3][2], triangle[shellStrainCount][triangleDofCount];
   detail::triangleCorners(reference, corners);
-  triangleStrainDisplacement(corners, 1.0 / 3.0, 1.0 / 3.0, triangle);
+  triangleStrainDisplacement(corners, 1.0 / 3.0, 1.0 / 3.0, triangle, quadraticEdges);
   for (int r = 0; r < shellStrainCount; ++r)
     for (int c = 0; c < shellDofCount; ++c) B[r][c] = c < triangleDofCount ? triangle[r][c] : 0.0;
 }

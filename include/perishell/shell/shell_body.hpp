@@ -48,7 +48,8 @@ struct ShellBody {
   Kokkos::View<RowOffset*, MemorySpaceT> nodeElementOffsets;
   Kokkos::View<LocalIndex*, MemorySpaceT> nodeElementEntries;
   Kokkos::View<double* [26], Kokkos::LayoutRight, MemorySpaceT> elementForces;
-  // One-point only: per element, the triangle's edges with Allman's term (triangleQuadraticEdges).
+  // Per element, a triangle's edges with Allman's term (triangleQuadraticEdges): the one-point
+  // kind's triangles build their forces with it, and a triangle's strains take it (both kinds).
   Kokkos::View<unsigned*, MemorySpaceT> quadraticEdges;
 
   LocalIndex numElements() const { return static_cast<LocalIndex>(quads.extent(0)); }
@@ -160,6 +161,7 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
   Kokkos::View<unsigned*, Kokkos::HostSpace> hostEdgeView("shell triangle quadratic edges", hostEdges.size());
   for (std::size_t k = 0; k < hostEdges.size(); ++k) hostEdgeView(k) = hostEdges[k];
   const auto quadraticEdges = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostEdgeView);
+  body.quadraticEdges = quadraticEdges;
   if (kind == ShellElementKind::OnePoint) {
     // Incidence over each element's distinct corners (a triangle's node 2 once).
     Kokkos::View<RowOffset*, Kokkos::HostSpace> offsets("shell node element offsets", mesh.numNodes() + 1);
@@ -175,7 +177,6 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
     body.nodeElementEntries = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, entries);
     body.elementForces = decltype(body.elementForces)("shell element forces", quads.extent(0));
     body.assembly = defaultElementForceAssembly<ExecutionSpaceT>();
-    body.quadraticEdges = quadraticEdges;
     return body;
   }
   body.localStiffness = decltype(body.localStiffness)("shell local stiffness", ccmElements.size());

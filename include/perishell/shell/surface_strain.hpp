@@ -21,7 +21,7 @@ void computeLargestSurfaceStrain(const ExecutionSpaceT& space, const ShellBody<M
         double d[shellDofCount], B[shellStrainCount][shellDofCount], generalised[6] = {0, 0, 0, 0, 0, 0};
         detail::deformationalDofs(local, current, rotations, d);
         linkWarpedDofsToFlat(local, d);  // strains of the flat element K_l stands for
-        shellCentreStrainDisplacement(local, B);
+        shellCentreStrainDisplacement(local, B, body.quadraticEdges(e));
         for (int r = 0; r < 6; ++r)  // membrane eps_xx eps_yy gamma_xy, curvatures kappa_xx kappa_yy kappa_xy
           for (int c = 0; c < shellDofCount; ++c) generalised[r] += B[r][c] * d[c];
         double largest = 0.0;
