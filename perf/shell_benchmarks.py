@@ -25,8 +25,9 @@ import time
 
 
 def write_msh(path, nodes, quads, groups):
-    """nodes: [(x, y, z)], 1-based quads [(a, b, c, d)], groups: name -> (dim, [elements]) where
-    a dim-1 element is a node pair and a dim-0 element a single node."""
+    """nodes: [(x, y, z)], 1-based quads [(a, b, c, d)] (or triangles (a, b, c), in any mix),
+    groups: name -> (dim, [elements]) where a dim-1 element is a node pair and a dim-0 element a
+    single node; every group but the surface "shell" needs at least one element."""
     names = list(groups)
     lines = ["$MeshFormat", "4.1 0 8", "$EndMeshFormat", "$PhysicalNames", str(len(names) + 1)]
     for tag, name in enumerate(names, start=1):
@@ -54,11 +55,15 @@ def write_msh(path, nodes, quads, groups):
             block.append(" ".join(map(str, (tag,) + element)))
             tag += 1
         blocks.append(block)
-    block = [f"2 1 3 {len(quads)}"]
-    for quad in quads:
-        block.append(" ".join(map(str, (tag,) + quad)))
-        tag += 1
-    blocks.append(block)
+    for corners, gmsh_type in ((4, 3), (3, 2)):
+        surface = [element for element in quads if len(element) == corners]
+        if not surface:
+            continue
+        block = [f"2 1 {gmsh_type} {len(surface)}"]
+        for element in surface:
+            block.append(" ".join(map(str, (tag,) + tuple(element))))
+            tag += 1
+        blocks.append(block)
     lines += ["$Elements", f"{len(blocks)} {tag - 1} 1 {tag - 1}"]
     for block in blocks:
         lines += block

@@ -22,26 +22,14 @@ import statistics
 import subprocess
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from shell_benchmarks import edge, grid, write_msh  # noqa: E402  (the Gmsh writer the benchmarks use)
+
 
 def write_plate(path, n, triangles):
-    """The unit square, n x n cells; node (i, j) is 1 + j (n + 1) + i; curves left/right/bottom/top."""
-    node = lambda i, j: 1 + j * (n + 1) + i
-    sides = {"bottom": [(i, 0) for i in range(n + 1)], "right": [(n, j) for j in range(n + 1)],
-             "top": [(i, n) for i in range(n + 1)], "left": [(0, j) for j in range(n + 1)]}
-    lines = ["$MeshFormat", "4.1 0 8", "$EndMeshFormat", "$PhysicalNames", "5"]
-    lines += [f'1 {tag} "{name}"' for tag, name in enumerate(sides, start=1)] + ['2 5 "plate"', "$EndPhysicalNames"]
-    lines += ["$Entities", "0 4 1 0"] + [f"{tag} 0 0 0 0 0 0 1 {tag} 0" for tag in range(1, 5)]
-    lines += ["1 0 0 0 1 1 0 1 5 0", "$EndEntities"]
-    count = (n + 1) ** 2
-    lines += ["$Nodes", f"1 {count} 1 {count}", f"2 1 0 {count}"] + [str(k) for k in range(1, count + 1)]
-    lines += [f"{i / n:.12g} {j / n:.12g} 0" for j in range(n + 1) for i in range(n + 1)] + ["$EndNodes"]
-    blocks, tag = [], 1
-    for entity, points in enumerate(sides.values(), start=1):
-        block = [f"1 {entity} 1 {n}"]
-        for a, b in zip(points, points[1:]):
-            block.append(f"{tag} {node(*a)} {node(*b)}")
-            tag += 1
-        blocks.append(block)
+    """The unit square, n x n cells (quads, or each cut into two triangles across alternating
+    diagonals); curves left/right/bottom/top."""
+    nodes, quads, node = grid(n, n, lambda a, b: (a, b, 0.0))
     cells = []
     for j in range(n):
         for i in range(n):
@@ -52,17 +40,11 @@ def write_plate(path, n, triangles):
                 cells += [(a, b, c), (a, c, d)]
             else:
                 cells += [(a, b, d), (b, c, d)]
-    block = [f"2 1 {2 if triangles else 3} {len(cells)}"]
-    for cell in cells:
-        block.append(" ".join(map(str, (tag,) + cell)))
-        tag += 1
-    blocks.append(block)
-    lines += ["$Elements", f"{len(blocks)} {tag - 1} 1 {tag - 1}"]
-    for block in blocks:
-        lines += block
-    lines += ["$EndElements"]
-    with open(path, "w") as f:
-        f.write("\n".join(lines) + "\n")
+    write_msh(path, nodes, cells, {
+        "bottom": (1, edge(node, [(i, 0) for i in range(n + 1)])),
+        "right": (1, edge(node, [(n, j) for j in range(n + 1)])),
+        "top": (1, edge(node, [(i, n) for i in range(n + 1)])),
+        "left": (1, edge(node, [(0, j) for j in range(n + 1)]))})
 
 
 def deck(mesh, n, solver):

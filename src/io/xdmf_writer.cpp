@@ -202,18 +202,15 @@ XdmfTimeSeriesWriter::XdmfTimeSeriesWriter(std::string directory, std::string ba
   const auto coordinates = contiguous(mesh.coordinates);
   const auto quads = contiguous(mesh.quads);
   // Triangles (stored a b c c) go out as XDMF triangles, so that viewers see three corners.
+  bool hasTriangles = false;
+  for (LocalIndex e = 0; e < numElements_ && !hasTriangles; ++e) hasTriangles = mesh::isTriangle(mesh.quads, e);
   std::vector<int> mixed;
-  for (LocalIndex element = 0; element < numElements_; ++element)
-    if (mesh::isTriangle(mesh.quads, element)) {
-      mixed.reserve(5 * static_cast<std::size_t>(numElements_));
-      for (LocalIndex e = 0; e < numElements_; ++e) {
-        const int corners = mesh::cornerCount(mesh.quads, e);
-        mixed.push_back(corners == 3 ? 4 : 5);
-        for (int corner = 0; corner < corners; ++corner) mixed.push_back(mesh.quads(e, corner));
-      }
-      mixedTopologyLength_ = mixed.size();
-      break;
-    }
+  for (LocalIndex e = 0; hasTriangles && e < numElements_; ++e) {
+    const int corners = mesh::cornerCount(mesh.quads, e);
+    mixed.push_back(corners == 3 ? 4 : 5);  // XDMF's Triangle and Quadrilateral
+    for (int corner = 0; corner < corners; ++corner) mixed.push_back(mesh.quads(e, corner));
+  }
+  mixedTopologyLength_ = mixed.size();
   writeHdf5FileAtomically(meshPath(), [&](hid_t file, const std::string& path) {
     writeDataset(file, "geometry", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {hsize_t(numNodes_), 3},
                  coordinates.data(), path);

@@ -84,6 +84,25 @@ inline ElementState stronglyDeformed() {
   return state;
 }
 
+// A reference triangle of about 1 m, not in a coordinate plane, stored as a b c c
+// (mesh/quad_mesh.hpp).
+inline void triangleReference(double X[4][3]) {
+  const double nodes[4][3] = {{0.0, 0.0, 0.0}, {1.1, 0.1, 0.3}, {0.2, 0.9, -0.2}, {0.2, 0.9, -0.2}};
+  for (int a = 0; a < 4; ++a)
+    for (int k = 0; k < 3; ++k) X[a][k] = nodes[a][k];
+}
+
+// stronglyDeformed's motion of nodes 0-2 on that triangle; node 3 moves and turns with node 2.
+inline ElementState stronglyDeformedTriangle() {
+  ElementState state = stronglyDeformed();
+  triangleReference(state.reference);
+  for (int k = 0; k < 3; ++k) {
+    state.positions[3][k] = state.positions[2][k];
+    for (int l = 0; l < 3; ++l) state.rotations[3][k][l] = state.rotations[2][k][l];
+  }
+  return state;
+}
+
 inline shell::ShellSection thickSection() {
   shell::ShellSection section;
   section.youngModulus = 70e9;

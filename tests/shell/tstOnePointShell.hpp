@@ -301,10 +301,8 @@ TEST(TEST_CATEGORY, explicit_triangle_force_is_the_mitc3_triangles) {
   // The written-out force of the explicit triangle and the stored-K_l force of the implicit
   // solver's triangle (shell/mitc4_shell.hpp, N = 3) are the derivative of one energy; also for
   // a scaled section and a triangle with one linear (quad-side) edge, and after a rigid motion.
-  const double X[4][3] = {{0.0, 0.0, 0.0}, {1.1, 0.1, 0.3}, {0.2, 0.9, -0.2}, {0.2, 0.9, -0.2}};
-  ElementState state = stronglyDeformed();
-  for (int a = 0; a < 4; ++a)
-    for (int k = 0; k < 3; ++k) state.reference[a][k] = X[a][k];
+  const ElementState state = stronglyDeformedTriangle();
+  const auto& X = state.reference;
   const shell::ShellSection section = thickSection();
   const double forceScale = section.youngModulus * section.thickness;
   for (const unsigned edges : {7u, 5u})

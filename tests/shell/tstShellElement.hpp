@@ -641,7 +641,8 @@ TEST(TEST_CATEGORY, shell_thin_triangle_cantilever_has_no_shear_locking) {
 
 TEST(TEST_CATEGORY, shell_triangle_rigid_motions_and_energy_gradient) {
   const shell::ShellSection section = thickSection();
-  const double X[4][3] = {{0.0, 0.0, 0.0}, {1.1, 0.1, 0.3}, {0.2, 0.9, -0.2}, {0.2, 0.9, -0.2}};
+  double X[4][3];
+  triangleReference(X);
   ASSERT_TRUE(shell::isTriangleElement(X));
   double localStiffness[dofs][dofs];
   shell::shellLocalStiffness(X, section, localStiffness);
@@ -665,13 +666,7 @@ TEST(TEST_CATEGORY, shell_triangle_rigid_motions_and_energy_gradient) {
   EXPECT_LE(worst, 1e-10);
 
   // A strong deformation: f = dW/dq, with node 3 moving and turning with node 2.
-  ElementState state = stronglyDeformed();
-  for (int a = 0; a < 4; ++a)
-    for (int k = 0; k < 3; ++k) state.reference[a][k] = X[a][k];
-  for (int k = 0; k < 3; ++k) {
-    state.positions[3][k] = state.positions[2][k];
-    for (int l = 0; l < 3; ++l) state.rotations[3][k][l] = state.rotations[2][k][l];
-  }
+  const ElementState state = stronglyDeformedTriangle();
   double force[dofs], ignored[dofs];
   internalForce(state, localStiffness, force);
   double error = 0.0, scale = 0.0;
@@ -697,14 +692,8 @@ TEST(TEST_CATEGORY, shell_triangle_on_three_nodes_equals_the_collapsed_quad) {
   // The solvers evaluate a triangle with N = 3 (18 DOF); it must be the collapsed quad (N = 4,
   // node 3 moving and turning with node 2) exactly: f_3 = P^T f_4, K_3 = P^T K_4 P, P the
   // 24 x 18 map that copies node 2's DOF to node 3.
-  const double X[4][3] = {{0.0, 0.0, 0.0}, {1.1, 0.1, 0.3}, {0.2, 0.9, -0.2}, {0.2, 0.9, -0.2}};
-  ElementState state = stronglyDeformed();
-  for (int a = 0; a < 4; ++a)
-    for (int k = 0; k < 3; ++k) state.reference[a][k] = X[a][k];
-  for (int k = 0; k < 3; ++k) {
-    state.positions[3][k] = state.positions[2][k];
-    for (int l = 0; l < 3; ++l) state.rotations[3][k][l] = state.rotations[2][k][l];
-  }
+  const ElementState state = stronglyDeformedTriangle();
+  const auto& X = state.reference;
   double K4[dofs][dofs], K3[18][18], f4[dofs], f3[18], T4[dofs][dofs], T3[18][18];
   shell::shellLocalStiffness(X, thickSection(), K4);
   for (int r = 0; r < 18; ++r)

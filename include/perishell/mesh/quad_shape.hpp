@@ -1,9 +1,9 @@
 #pragma once
-// The shape checks a 4-node quad (and a triangle) must pass before any element or node weight is built on it:
-// no two corners at one point, a non-zero area, and an outline that neither crosses itself
-// (a bow-tie: corners listed out of order) nor folds inward (a re-entrant or straight
-// corner, where the bilinear map's Jacobian vanishes or changes sign). Either orientation of
-// a valid quad passes. Used where meshes enter (the Gmsh reader), so a bad element is named
+// The shape checks a 4-node quad (and a triangle) must pass before any element or node
+// weight is built on it: no two corners at one point, a non-zero area, and an outline that
+// neither crosses itself (a bow-tie: corners listed out of order) nor folds inward (a
+// re-entrant or straight corner, where the bilinear map's Jacobian vanishes or changes
+// sign). Either orientation of a valid quad passes. Used where meshes enter (the Gmsh reader), so a bad element is named
 // by the user's tags and file line instead of failing later by an internal index.
 #include <array>
 

@@ -25,6 +25,7 @@
 //    the plain linear triangle locks in shear.
 // Every term is integrated by the 3-point rule at (1/6, 1/6), (2/3, 1/6), (1/6, 2/3), exact
 // for the quadratic integrands of a flat triangle.
+#include <perishell/mesh/quad_mesh.hpp>
 #include <perishell/shell/shell_section.hpp>
 
 #include <set>
@@ -176,7 +177,7 @@ template <class ConnectivityT>
 std::vector<unsigned> triangleQuadraticEdges(const ConnectivityT& elements, std::size_t numElements) {
   const auto key = [](long a, long b) { return std::make_pair(a < b ? a : b, a < b ? b : a); };
   std::set<std::pair<long, long>> quadEdges;
-  const auto isTriangle = [&](std::size_t e) { return elements(e, 3) == elements(e, 2); };
+  const auto isTriangle = [&](std::size_t e) { return mesh::isTriangle(elements, static_cast<LocalIndex>(e)); };
   for (std::size_t e = 0; e < numElements; ++e)
     if (!isTriangle(e))
       for (int k = 0; k < 4; ++k) quadEdges.insert(key(elements(e, k), elements(e, (k + 1) % 4)));

@@ -257,8 +257,7 @@ KOKKOS_INLINE_FUNCTION double shellStrainDisplacement(const ShellReference& refe
 KOKKOS_INLINE_FUNCTION void shellCentreStrainDisplacement(const ShellReference& reference,
                                                           double B[shellStrainCount][shellDofCount],
                                                           unsigned quadraticEdges = allQuadraticEdges) {
-  const auto& x = reference.local;
-  if (!(x[3][0] == x[2][0] && x[3][1] == x[2][1] && x[3][2] == x[2][2])) {
+  if (!isTriangleElement(reference.local)) {
     shellStrainDisplacement(reference, 0.0, 0.0, B);
     return;
   }

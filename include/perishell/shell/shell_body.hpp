@@ -10,6 +10,7 @@
 #include <perishell/shell/mitc4_shell.hpp>
 #include <perishell/shell/one_point_shell.hpp>
 
+#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -157,11 +158,12 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
   body.referencePositions = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, mesh.coordinates);
   body.quads = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, quads);
   body.membraneBendingScale = membraneBendingScale;
+  // A managed host view: on a host memory space the mirror is this view itself.
   const std::vector<unsigned> hostEdges = triangleQuadraticEdges(quads, quads.extent(0));
   Kokkos::View<unsigned*, Kokkos::HostSpace> hostEdgeView("shell triangle quadratic edges", hostEdges.size());
-  for (std::size_t k = 0; k < hostEdges.size(); ++k) hostEdgeView(k) = hostEdges[k];
-  const auto quadraticEdges = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostEdgeView);
-  body.quadraticEdges = quadraticEdges;
+  std::copy(hostEdges.begin(), hostEdges.end(), hostEdgeView.data());
+  body.quadraticEdges = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostEdgeView);
+  const auto quadraticEdges = body.quadraticEdges;
   if (kind == ShellElementKind::OnePoint) {
     // Incidence over each element's distinct corners (a triangle's node 2 once).
     Kokkos::View<RowOffset*, Kokkos::HostSpace> offsets("shell node element offsets", mesh.numNodes() + 1);
@@ -298,26 +300,24 @@ void addShellNodalStiffness(const ExecutionSpaceT& space, const ShellBody<Memory
       KOKKOS_LAMBDA(const LocalIndex e) {
         double moving[4] = {0.0, 0.0, 0.0, 0.0}, turning[4] = {0.0, 0.0, 0.0, 0.0};
         const int corners = mesh::cornerCount(body.quads, e);
-        if (onePoint && corners == 3) {
-          double reference[4][3], local[3][2], K[triangleDofCount][triangleDofCount];
-          for (int a = 0; a < 4; ++a)
-            for (int d = 0; d < 3; ++d) reference[a][d] = body.referencePositions(body.quads(e, a), d);
-          detail::triangleCorners(shellReference(reference), local);
-          const double scale = 0.25 * (body.membraneBendingScale(e, 0) + body.membraneBendingScale(e, 1) +
-                                       body.membraneBendingScale(e, 2) + body.membraneBendingScale(e, 3));
-          triangleLocalStiffness(local, body.section, scale, body.quadraticEdges(e), K);
-          for (int a = 0; a < 3; ++a)
-            for (int d = 0; d < 3; ++d) {
-              moving[a] += K[6 * a + d][6 * a + d] / 3.0;
-              turning[a] += K[6 * a + 3 + d][6 * a + 3 + d] / 3.0;
-            }
-        } else if (onePoint) {
+        if (onePoint) {
           double reference[4][3];
           for (int a = 0; a < 4; ++a)
             for (int d = 0; d < 3; ++d) reference[a][d] = body.referencePositions(body.quads(e, a), d);
           const double scale = 0.25 * (body.membraneBendingScale(e, 0) + body.membraneBendingScale(e, 1) +
                                        body.membraneBendingScale(e, 2) + body.membraneBendingScale(e, 3));
-          onePointShellNodalStiffness(reference, body.section, scale, moving, turning);
+          if (corners == 4) {
+            onePointShellNodalStiffness(reference, body.section, scale, moving, turning);
+          } else {  // the explicit triangle stores no K_l: build it once here
+            double local[3][2], K[triangleDofCount][triangleDofCount];
+            detail::triangleCorners(shellReference(reference), local);
+            triangleLocalStiffness(local, body.section, scale, body.quadraticEdges(e), K);
+            for (int a = 0; a < 3; ++a)
+              for (int d = 0; d < 3; ++d) {
+                moving[a] += K[6 * a + d][6 * a + d] / 3.0;
+                turning[a] += K[6 * a + 3 + d][6 * a + 3 + d] / 3.0;
+              }
+          }
         } else {
           for (int a = 0; a < 4; ++a)
             for (int d = 0; d < 3; ++d) {
