@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 #include <set>
 #include <unordered_map>
@@ -23,6 +24,48 @@ Point cross(const Point& a, const Point& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
 Point unit(const Point& a) { return (1.0 / std::sqrt(dot(a, a))) * a; }
+
+// second after first (row-major 3 x 3).
+std::array<double, 9> compose(const std::array<double, 9>& second, const std::array<double, 9>& first) {
+  std::array<double, 9> product{};
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 3; ++k) product[3 * r + c] += second[3 * r + k] * first[3 * k + c];
+  return product;
+}
+
+}  // namespace
+
+std::optional<MirrorMaps> mirrorMaps(const FreeEdge& edge, std::uint8_t heldDofs) {
+  // A component along `axis` is held when the axis lies in the span of the held global axes.
+  const auto held = [&](const Point& axis, int firstDof) {
+    double inSpan = 0.0;
+    for (int a = 0; a < 3; ++a)
+      if (heldDofs & (1u << (firstDof + a))) inSpan += axis[a] * axis[a];
+    return inSpan >= 1.0 - 1e-6;
+  };
+  const Point n = edge.outward, t = edge.tangent, z = edge.normal;
+  enum class Part { Free, Held, Even, Odd };
+  const bool un = held(n, 0), ut = held(t, 0), w = held(z, 0), thetaT = held(t, 3);
+  const Part membrane = un && ut ? Part::Held : un ? Part::Even : ut ? Part::Odd : Part::Free;
+  const Part bending = w && thetaT ? Part::Held : thetaT ? Part::Even : w ? Part::Odd : Part::Free;
+  if (membrane == Part::Free || bending == Part::Free) return std::nullopt;
+  // Signs of (u_n, u_t, w) and (theta_n, theta_t, theta_z) in the image (model-setup.md).
+  const auto sign = [](Part part, double even) { return part == Part::Held ? 0.0 : part == Part::Even ? even : -even; };
+  const double displacementSigns[3] = {sign(membrane, -1.0), sign(membrane, 1.0), sign(bending, 1.0)};
+  const double rotationSigns[3] = {sign(bending, 1.0), sign(bending, -1.0), sign(membrane, -1.0)};
+  const Point frame[3] = {n, t, z};
+  MirrorMaps maps{};
+  for (int k = 0; k < 3; ++k)
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        maps.displacement[3 * r + c] += displacementSigns[k] * frame[k][r] * frame[k][c];
+        maps.rotation[3 * r + c] += rotationSigns[k] * frame[k][r] * frame[k][c];
+      }
+  return maps;
+}
+
+namespace {
 
 class LayerBuilder {
  public:
@@ -51,7 +94,7 @@ class LayerBuilder {
   }
 
   struct Built {
-    std::vector<LocalIndex> nodes;  // the request's layer nodes, sorted
+    std::vector<LocalIndex> nodes, mirrored;  // the request's held and mirrored layer nodes, sorted
     bool hasFreeEdges = false, hasRoom = false;
   };
   // The layer of every request at once (a corner between two sets' edges is filled too).
@@ -74,6 +117,17 @@ class LayerBuilder {
     struct TaggedEdge {
       const FreeEdge* edge;
       int set;
+      std::optional<MirrorMaps> maps;  // a Mirrored request's
+    };
+    struct Image {  // how an image follows its master
+      MirrorMaps maps;
+      std::array<double, 9> reflection;
+    };
+    const auto reflectionAcross = [](const FreeEdge& edge) {
+      std::array<double, 9> matrix{};
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) matrix[3 * r + c] = (r == c ? 1.0 : 0.0) - 2.0 * edge.outward[r] * edge.outward[c];
+      return matrix;
     };
     std::vector<TaggedEdge> edges;
     for (const auto& edge : freeEdges_) {
@@ -86,13 +140,21 @@ class LayerBuilder {
             std::binary_search(requests[r].nodes.begin(), requests[r].nodes.end(), edge.b))
           owner = static_cast<int>(r);
       if (owner < 0) continue;
+      std::optional<MirrorMaps> maps;
+      if (requests[owner].motion == LayerMotion::Mirrored) {
+        maps = mirrorMaps(edge, requests[owner].heldDofs);
+        if (!maps) continue;
+      }
       result[owner].hasFreeEdges = true;
       if (materialBeyond(mesh_, realNodes_, edge, depth_)) continue;
-      edges.push_back({&edge, owner});
+      edges.push_back({&edge, owner, maps});
       result[owner].hasRoom = true;
     }
+    const auto isHeld = [&](int set) { return requests[set].motion == LayerMotion::Held; };
 
-    const auto imageNode = [&](const Point& image, std::initializer_list<int> sets) {
+    // follows: how the image follows its master (none when a Held set owns it; the first image stays).
+    const auto imageNode = [&](const Point& image, std::initializer_list<int> sets, LocalIndex master,
+                               const std::optional<Image>& follows) {
       LocalIndex found = -1;
       double nearest = tolerance_;
       targets.forEachIn(image - Point{tolerance_, tolerance_, tolerance_},
@@ -110,18 +172,23 @@ class LayerBuilder {
         coordinates_.insert(coordinates_.end(), image.begin(), image.end());
         addTarget(image, found);
       }
-      if (found >= firstNode_)
-        for (const int set : sets) result[set].nodes.push_back(found);
+      if (found >= firstNode_) {
+        for (const int set : sets) (isHeld(set) ? result[set].nodes : result[set].mirrored).push_back(found);
+        if (follows) mirrors_.emplace(found, MirrorImage{found, master, follows->maps, follows->reflection});
+      }
       return found;
     };
     // The image of an element under `mirrors` reflections: after an odd number its corners
     // are taken in reverse, so that its normal keeps the original's side. A triangle's image
     // is a triangle (a b c c, mesh/quad_mesh.hpp).
-    const auto addImage = [&](LocalIndex element, std::initializer_list<int> sets, int mirrors, auto&& map) {
+    const auto addImage = [&](LocalIndex element, std::initializer_list<int> sets, int mirrors, auto&& map,
+                              const std::optional<Image>& follows) {
       const int corners = cornerCount(mesh_.quads, element);
       std::array<LocalIndex, 4> image;
-      for (int k = 0; k < corners; ++k)
-        image[k] = imageNode(map(node(mesh_.quads(element, mirrors % 2 == 1 ? corners - 1 - k : k))), sets);
+      for (int k = 0; k < corners; ++k) {
+        const LocalIndex source = mesh_.quads(element, mirrors % 2 == 1 ? corners - 1 - k : k);
+        image[k] = imageNode(map(node(source)), sets, source, follows);
+      }
       if (corners == 3) image[3] = image[2];
       std::array<LocalIndex, 4> key = image;
       std::sort(key.begin(), key.begin() + corners);
@@ -131,9 +198,11 @@ class LayerBuilder {
       if (elementKeys_.insert(key).second) quads_.push_back(image);
     };
 
-    for (const auto& [edge, set] : edges)
-      forEachMirrored(*edge, [&, edge = edge, set = set](LocalIndex element) {
-        addImage(element, {set}, 1, [&](const Point& p) { return mirror(*edge, p); });
+    for (const auto& [edge, set, maps] : edges)
+      forEachMirrored(*edge, [&, edge = edge, set = set, maps = maps](LocalIndex element) {
+        std::optional<Image> follows;
+        if (maps) follows = Image{*maps, reflectionAcross(*edge)};
+        addImage(element, {set}, 1, [&](const Point& p) { return mirror(*edge, p); }, follows);
       });
     // Convex corners: the images across both edges fill the wedge that neither strip covers.
     for (const auto& first : edges)
@@ -143,6 +212,11 @@ class LayerBuilder {
         const Point corner = node(first.edge->b);
         const double reach = std::sqrt(2.0) * depth_ + largestDiameter_;
         const auto across = [&](const Point& p) { return mirror(*second.edge, mirror(*first.edge, p)); };
+        std::optional<Image> follows;
+        if (first.maps && second.maps)
+          follows = Image{{compose(second.maps->displacement, first.maps->displacement),
+                           compose(second.maps->rotation, first.maps->rotation)},
+                          compose(reflectionAcross(*second.edge), reflectionAcross(*first.edge))};
         centroidGrid_.forEachIn(corner - Point{reach, reach, reach}, corner + Point{reach, reach, reach},
                                 [&](LocalIndex element) {
                                   const Point c = centroid(element);
@@ -152,7 +226,7 @@ class LayerBuilder {
                                                             dot(image - corner, second.edge->outward)};
                                   for (const double distance : beyond)
                                     if (!(distance > 0.0 && distance <= depth_)) return;
-                                  addImage(element, {first.set, second.set}, 2, across);
+                                  addImage(element, {first.set, second.set}, 2, across, follows);
                                 });
       }
     // Images of discarded elements (repeated or degenerate) may have left unused nodes.
@@ -170,14 +244,70 @@ class LayerBuilder {
     for (auto& quad : quads_)
       for (LocalIndex& n : quad)
         if (n >= firstNode_) n = renumbered[n - firstNode_];
-    for (auto& [nodes, hasFreeEdges, hasRoom] : result) {
+    const auto renumber = [&](std::vector<LocalIndex>& nodes) {
       for (LocalIndex& n : nodes) n = renumbered[n - firstNode_];
       nodes.erase(std::remove(nodes.begin(), nodes.end(), -1), nodes.end());
       std::sort(nodes.begin(), nodes.end());
       nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    };
+    std::set<LocalIndex> held;
+    for (auto& built : result) {
+      renumber(built.nodes);
+      held.insert(built.nodes.begin(), built.nodes.end());
     }
+    // A node both held and mirrored (a corner between a clamp and a symmetry plane) is held.
+    for (auto& built : result) {
+      renumber(built.mirrored);
+      built.mirrored.erase(std::remove_if(built.mirrored.begin(), built.mirrored.end(),
+                                          [&](LocalIndex n) { return held.count(n) > 0; }),
+                           built.mirrored.end());
+    }
+    for (const auto& [oldNode, image] : mirrors_) {
+      const LocalIndex n = renumbered[oldNode - firstNode_];
+      if (n >= 0 && held.count(n) == 0) images_.push_back({n, image.master, image.maps, image.reflection});
+    }
+    std::sort(images_.begin(), images_.end(),
+              [](const MirrorImage& a, const MirrorImage& b) { return a.node < b.node; });
+    std::vector<const FreeEdge*> mirrorEdges;
+    for (const auto& tagged : edges)
+      if (tagged.maps) mirrorEdges.push_back(tagged.edge);
+    computeShares(mirrorEdges);
     return result;
   }
+
+  std::vector<MirrorImage> takeImages() { return std::move(images_); }
+
+  // The share of each node's neighbourhood inside the mirror lines (SupportLayer::mirrorShare):
+  // 0 beyond any line (every image, and the held layer's nodes beyond one), 1/2 per distinct
+  // line through the node (two edges of one straight or gently curved line are one; a corner
+  // turns by more than minimumCornerTurn). Only nodes within reach of a mirror edge count: the
+  // edges' own nodes and the layer's.
+  void computeShares(const std::vector<const FreeEdge*>& mirrorEdges) {
+    if (mirrorEdges.empty()) return;
+    const double reach = depth_ + largestDiameter_;
+    const auto shareOf = [&](const Point& p) {
+      std::vector<Point> lines;
+      for (const FreeEdge* edge : mirrorEdges) {
+        const Local l = local(*edge, p);
+        if (l.along * edge->length < -reach || (l.along - 1.0) * edge->length > reach || l.offPlane > reach) continue;
+        if (-l.inside > tolerance_ && -l.inside <= reach) return 0.0;
+        if (std::abs(l.inside) > tolerance_) continue;
+        const bool known = std::any_of(lines.begin(), lines.end(), [&](const Point& line) {
+          const Point turn = cross(line, edge->outward);
+          return std::sqrt(dot(turn, turn)) < minimumCornerTurn && dot(line, edge->outward) > 0.0;
+        });
+        if (!known) lines.push_back(edge->outward);
+      }
+      return std::pow(0.5, static_cast<double>(lines.size()));
+    };
+    for (const FreeEdge* edge : mirrorEdges)
+      for (const LocalIndex n : {edge->a, edge->b}) share_[n] = shareOf(node(n));
+    for (LocalIndex k = 0; k < numLayerNodes(); ++k) {
+      const double share = shareOf(layerNode(firstNode_ + k));
+      if (share < 1.0) share_[firstNode_ + k] = share;
+    }
+  }
+  std::map<LocalIndex, double> takeShares() { return std::move(share_); }
 
   // Writes the layer into the mesh.
   void append() {
@@ -253,6 +383,9 @@ class LayerBuilder {
   std::vector<double> coordinates_;                // new layer nodes, x y z each
   std::vector<std::array<LocalIndex, 4>> quads_;  // layer elements
   std::set<std::array<LocalIndex, 4>> elementKeys_;
+  std::map<LocalIndex, MirrorImage> mirrors_;  // by layer node, before renumbering
+  std::vector<MirrorImage> images_;
+  std::map<LocalIndex, double> share_;
 };
 
 }  // namespace
@@ -268,7 +401,10 @@ SupportLayer addSupportLayer(HostQuadMesh& mesh, const std::vector<SupportLayerR
   for (std::size_t r = 0; r < requests.size(); ++r) {
     if (built[r].hasFreeEdges && !built[r].hasRoom) layer.skippedSets.push_back(requests[r].setName);
     if (!built[r].nodes.empty()) layer.nodesOfSet[requests[r].setName] = std::move(built[r].nodes);
+    if (!built[r].mirrored.empty()) layer.mirroredNodesOfSet[requests[r].setName] = std::move(built[r].mirrored);
   }
+  layer.mirrorImages = builder.takeImages();
+  layer.mirrorShare = builder.takeShares();
   builder.append();
   return layer;
 }

@@ -316,24 +316,31 @@ void checkPreCrackNormals(const Model& model) {
   }
 }
 
-// The supports' sets whose DOFs clamp a PD edge: all three displacements and every rotation
-// but, at most, the drilling one (about the shell normal at each of the set's nodes).
-std::vector<mesh::SupportLayerRequest> clampedSets(const Model& model) {
+// The supports' sets that get a support layer (docs/model-setup.md, "Supports on PD regions"):
+// held where their DOFs clamp a PD edge (all three displacements and every rotation but, at
+// most, the drilling one about the shell normal at each of the set's nodes); mirrored where
+// they hold other DOFs at zero, each edge then imaged as mesh::mirrorMaps says.
+std::vector<mesh::SupportLayerRequest> layerRequests(const Model& model) {
   std::map<std::string, std::uint8_t> dofsOfSet;
-  for (const auto& support : model.deck.supports)
+  std::set<std::string> movingSets;  // a nonzero value or a curve: no mirror image
+  for (const auto& support : model.deck.supports) {
     for (const auto dof : support.dofs) dofsOfSet[support.set] |= std::uint8_t(1u << static_cast<int>(dof));
+    if (support.value != 0.0 || !support.curve.empty()) movingSets.insert(support.set);
+  }
   const auto normals = mesh::computeNodeNormals(Kokkos::DefaultHostExecutionSpace{}, model.shell.mesh);
   std::vector<mesh::SupportLayerRequest> requests;
   for (const auto& [set, dofs] : dofsOfSet) {
-    if ((dofs & 0b111) != 0b111) continue;
     auto nodes = model.shell.sets.nodesOfNodeOrEdgeSet(set);
-    bool clamped = true;
-    for (int axis = 0; axis < 3; ++axis) {
+    bool clamped = (dofs & 0b111) == 0b111;
+    for (int axis = 0; axis < 3 && clamped; ++axis) {
       if (dofs & (1u << (3 + axis))) continue;
       constexpr double drillingOnly = 1.0 - 1e-6;  // the free rotation axis is the normal
       for (const LocalIndex node : nodes) clamped = clamped && std::abs(normals(node, axis)) >= drillingOnly;
     }
-    if (clamped) requests.push_back({set, std::move(nodes)});
+    if (clamped)
+      requests.push_back({set, std::move(nodes), mesh::LayerMotion::Held, dofs});
+    else if (movingSets.count(set) == 0)
+      requests.push_back({set, std::move(nodes), mesh::LayerMotion::Mirrored, dofs});
   }
   return requests;
 }
@@ -360,15 +367,28 @@ void addSupportLayer(Model& model) {
   const LocalIndex numElements = model.shell.mesh.numElements();
   std::vector<std::uint8_t> isPd(model.elementIsPd.data(), model.elementIsPd.data() + numElements);
   const bool wanted = model.deck.peridynamics.supportLayer && model.numPdElements > 0;
-  model.supportLayer = mesh::addSupportLayer(model.shell.mesh, wanted ? clampedSets(model) : std::vector<mesh::SupportLayerRequest>{},
+  model.supportLayer = mesh::addSupportLayer(model.shell.mesh, wanted ? layerRequests(model) : std::vector<mesh::SupportLayerRequest>{},
                                              isPd, model.horizon(), model.gridSpacing());
   const LocalIndex numAll = model.shell.mesh.numElements();
+  if (!model.supportLayer.mirrorShare.empty()) {
+    const Kokkos::DefaultHostExecutionSpace host;
+    const HostQuadMesh& mesh = model.shell.mesh;
+    const auto withLayer = mesh::computeNodeAreas(host, mesh);
+    const HostQuadMesh deckOnly{mesh.coordinates,
+                                Kokkos::subview(mesh.quads, std::make_pair(LocalIndex(0), numElements), Kokkos::ALL)};
+    const auto deckAreas = mesh::computeNodeAreas(host, deckOnly);
+    for (const auto& [node, share] : model.supportLayer.mirrorShare)
+      if (node < model.supportLayer.firstNode && share > 0.0 && withLayer(node) > 0.0)
+        model.supportLayer.massShare[node] = deckAreas(node) / withLayer(node);
+  }
   Kokkos::resize(model.elementIsPd, numAll);
   for (LocalIndex element = numElements; element < numAll; ++element) model.elementIsPd(element) = 1;
   std::set<std::pair<LocalIndex, int>> constrained;
   for (const auto& support : model.deck.supports)
     for (const LocalIndex node : model.supportNodes(support))
       for (const auto dof : support.dofs) constrained.insert({node, static_cast<int>(dof)});
+  for (const auto& image : model.supportLayer.mirrorImages)
+    for (int dof = 0; dof < 6; ++dof) constrained.insert({image.node, dof});
   model.numConstrainedDofs = static_cast<long long>(constrained.size());
 }
 

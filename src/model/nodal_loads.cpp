@@ -267,6 +267,9 @@ SupportConditions buildSupportConditions(const Model& model) {
         conditions.curveIndex(node, dof) = static_cast<std::int8_t>(prescription.curve);
       }
   }
+  // A mirrored layer node has no DOF of its own: it follows its master
+  // (solvers/mirror_constraints.hpp), so the solvers take it as held.
+  for (const auto& image : model.supportLayer.mirrorImages) conditions.constrainedDofs(image.node) = 0b111111;
   return conditions;
 }
 

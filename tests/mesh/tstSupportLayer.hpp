@@ -2,6 +2,7 @@
 // images of the elements within the depth, corners filled, nodes shared with the edge.
 #include <perishell/mesh/generators.hpp>
 #include <perishell/mesh/node_geometry.hpp>
+#include <perishell/io/deck.hpp>
 #include <perishell/mesh/support_layer.hpp>
 
 #include <cmath>
@@ -114,6 +115,88 @@ TEST(TEST_CATEGORY, support_layer_never_covers_the_far_face_of_a_slit) {
   EXPECT_EQ(layer.nodesOfSet.count("slit-face"), 0u);
   EXPECT_EQ(layer.nodesOfSet.at("outer").size(), 3u * 7u);
   for (LocalIndex k = layer.firstNode; k < slit.numNodes(); ++k) EXPECT_LT(slit.coordinates(k, 0), 0.0);
+}
+
+// The edge frame of a plate's edge x = const: n = +x, t = +y, z = +z.
+perishell::mesh::FreeEdge edgeAlongY() {
+  perishell::mesh::FreeEdge edge{};
+  edge.outward = {1.0, 0.0, 0.0};
+  edge.tangent = {0.0, 1.0, 0.0};
+  edge.normal = {0.0, 0.0, 1.0};
+  edge.length = 0.1;
+  return edge;
+}
+
+std::uint8_t dofs(std::initializer_list<perishell::deck::Dof> held) {
+  std::uint8_t mask = 0;
+  for (const auto dof : held) mask |= std::uint8_t(1u << static_cast<int>(dof));
+  return mask;
+}
+
+void expectDiagonal(const std::array<double, 9>& map, std::array<double, 3> diagonal, const char* what) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(map[3 * r + c], r == c ? diagonal[r] : 0.0, 1e-14) << what << " " << r << c;
+}
+
+TEST(TEST_CATEGORY, support_layer_mirror_maps_follow_the_held_dofs) {
+  using perishell::deck::Dof;
+  using perishell::mesh::mirrorMaps;
+  const auto edge = edgeAlongY();
+  // Symmetry plane x = const (u_n, theta_t, theta_z held): the reflection, u -> P u, theta -> -P theta.
+  const auto symmetry = mirrorMaps(edge, dofs({Dof::Ux, Dof::Ry, Dof::Rz}));
+  ASSERT_TRUE(symmetry);
+  expectDiagonal(symmetry->displacement, {-1.0, 1.0, 1.0}, "symmetry u");
+  expectDiagonal(symmetry->rotation, {1.0, -1.0, -1.0}, "symmetry theta");
+  // A rigid diaphragm (u_t, w held): the antisymmetric image, u -> -P u, theta -> P theta.
+  const auto diaphragm = mirrorMaps(edge, dofs({Dof::Uy, Dof::Uz}));
+  ASSERT_TRUE(diaphragm);
+  expectDiagonal(diaphragm->displacement, {1.0, -1.0, -1.0}, "diaphragm u");
+  expectDiagonal(diaphragm->rotation, {-1.0, 1.0, 1.0}, "diaphragm theta");
+  // A hinge (all displacements held): membrane held, bending odd (w and theta_n odd, theta_t even).
+  const auto hinge = mirrorMaps(edge, dofs({Dof::Ux, Dof::Uy, Dof::Uz}));
+  ASSERT_TRUE(hinge);
+  expectDiagonal(hinge->displacement, {0.0, 0.0, -1.0}, "hinge u");
+  expectDiagonal(hinge->rotation, {-1.0, 1.0, 0.0}, "hinge theta");
+  // w alone leaves the membrane free, u_n alone the bending: no image is exact, none is made.
+  EXPECT_FALSE(mirrorMaps(edge, dofs({Dof::Uz})));
+  EXPECT_FALSE(mirrorMaps(edge, dofs({Dof::Ux})));
+  // An edge at 45 degrees: u_x held is not u_n held.
+  auto oblique = edge;
+  oblique.outward = {std::sqrt(0.5), std::sqrt(0.5), 0.0};
+  oblique.tangent = {-std::sqrt(0.5), std::sqrt(0.5), 0.0};
+  EXPECT_FALSE(mirrorMaps(oblique, dofs({Dof::Ux, Dof::Ry, Dof::Rz})));
+  const auto obliqueSymmetry = mirrorMaps(oblique, dofs({Dof::Ux, Dof::Uy, Dof::Rx, Dof::Ry, Dof::Rz}));
+  ASSERT_TRUE(obliqueSymmetry);  // u_n, u_t held: membrane held; theta_t held, w free: bending even
+  EXPECT_NEAR(obliqueSymmetry->displacement[8], 1.0, 1e-15);
+  EXPECT_NEAR(obliqueSymmetry->displacement[0], 0.0, 1e-15);
+}
+
+TEST(TEST_CATEGORY, support_layer_mirrored_nodes_image_their_masters) {
+  using perishell::deck::Dof;
+  auto plate = perishell::mesh::makePlate(1.0, 0.6, 0.1);
+  const LocalIndex numNodes = plate.mesh.numNodes();
+  std::vector<std::uint8_t> all(plate.mesh.numElements(), 1);
+  // Symmetry at x = 1 (mirrored), a clamp at y = 0 (held): the corner beyond both is held.
+  const auto layer = perishell::mesh::addSupportLayer(
+      plate.mesh,
+      {{"right", plate.sets.nodesOfNodeOrEdgeSet("right"), perishell::mesh::LayerMotion::Mirrored,
+        dofs({Dof::Ux, Dof::Ry, Dof::Rz})},
+       {"bottom", plate.sets.nodesOfNodeOrEdgeSet("bottom")}},
+      all, 0.3, 0.1);
+  ASSERT_EQ(layer.mirroredNodesOfSet.count("right"), 1u);
+  EXPECT_EQ(layer.mirroredNodesOfSet.at("right").size(), 3u * 6u);  // columns 11 .. 13, rows 1 .. 6
+  EXPECT_EQ(layer.mirrorImages.size(), 3u * 6u);
+  // The strip, the corner, and the clamp's line y = 0 beyond the symmetry plane.
+  EXPECT_EQ(layer.nodesOfSet.at("bottom").size(), 3u * 11u + 3u * 3u + 3u);
+  const auto x = [&](LocalIndex n, int d) { return plate.mesh.coordinates(n, d); };
+  for (const auto& image : layer.mirrorImages) {
+    EXPECT_GE(image.node, numNodes);
+    EXPECT_LT(image.master, numNodes);
+    EXPECT_NEAR(x(image.node, 0), 2.0 - x(image.master, 0), 1e-12);  // reflected across x = 1
+    EXPECT_NEAR(x(image.node, 1), x(image.master, 1), 1e-12);
+    EXPECT_GT(x(image.node, 1), 0.05);  // the corner's nodes are the clamp's
+    expectDiagonal(image.maps.displacement, {-1.0, 1.0, 1.0}, "u");
+  }
 }
 
 }  // namespace support_layer_test

@@ -3,7 +3,14 @@
 // with a PD zone around the centre, with and without the support layer
 // (mesh/support_layer.hpp), and the sum of reactions against the applied load; and a slit
 // ring (two coincident mesh edges) where PD must agree with CCM.
+#include <perishell/coupling/make_coupled_model.hpp>
+#include <perishell/solvers/explicit/central_difference.hpp>
+#include <perishell/solvers/model_actions.hpp>
 #include <verification/clamped_plate.hpp>
+
+#include <algorithm>
+#include <utility>
+#include <vector>
 
 #include <cmath>
 #include <cstdio>
@@ -42,6 +49,74 @@ TEST(TEST_CATEGORY, clamped_plate_with_a_pd_centre) {
       "clamped plate 50 % PD around the centre a/40");
   EXPECT_LT(std::abs(result.relativeError), 0.03);
   EXPECT_NEAR(-result.reactionZ, pressure, 1e-8 * pressure);
+}
+
+// The quarter with two symmetry planes: their mirrored layers (assembly/mirror_images.hpp)
+// give the PD nodes next to the planes the bonds of the material beyond them, so the quarter
+// answers as the whole plate does at the same spacing.
+TEST(TEST_CATEGORY, quarter_clamped_plate_pd_mirrors_the_whole_plate) {
+  using namespace plate_verification_test;
+  const auto whole = solveClampedPlate(clampedPlate(40, "{default: pd}"), "clamped plate 100 % PD a/40");
+  const auto quarterModel = quarterClampedPlate(40, "{default: pd}");
+  ASSERT_EQ(quarterModel.supportLayer.mirroredNodesOfSet.size(), 2u);
+  const auto quarter = solveClampedPlate(quarterModel, "its quarter, two symmetry planes mirrored");
+  EXPECT_NEAR(quarter.relativeError, whole.relativeError, 0.003);
+  EXPECT_LT(std::abs(quarter.relativeError), 0.01);
+  // The images carry no z force of their own (w is even across a symmetry plane): a quarter of
+  // the load reaches the clamps.
+  EXPECT_NEAR(-quarter.reactionZ, 0.25 * pressure, 1e-8 * pressure);
+}
+
+// The same quarter, explicit: under a suddenly applied pressure its centre follows the whole
+// plate's over the first swing, and the energy balance holds with the images' forces
+// condensed onto their masters.
+TEST(TEST_CATEGORY, quarter_clamped_plate_pd_explicit_follows_the_whole_plate) {
+  using namespace plate_verification_test;
+  using Memory = TEST_EXECSPACE::memory_space;
+  const auto centreHistory = [](const perishell::model::Model& model, double timeStep, int steps, double& balance) {
+    const auto bodies = perishell::coupling::makeCoupledBodies(TEST_EXECSPACE{}, model);
+    perishell::solvers::ExplicitOptions options;
+    options.density = model.deck.material.density;
+    options.thickness = model.deck.material.thickness;
+    options.timeStep = timeStep;
+    perishell::solvers::CentralDifferenceSolver<TEST_EXECSPACE> solver(
+        TEST_EXECSPACE{}, bodies.pdBody, bodies.shellElements(), perishell::solvers::makeExternalActions<Memory>(model),
+        options);
+    const auto& x = model.shell.mesh.coordinates;
+    perishell::LocalIndex centre = -1;
+    for (perishell::LocalIndex node = 0; node < model.numMeshNodes(); ++node)
+      if (std::abs(x(node, 0) - 0.5) < 1e-9 && std::abs(x(node, 1) - 0.5) < 1e-9) centre = node;
+    std::vector<double> history;
+    for (int step = 1; step <= steps; ++step) {
+      solver.step();
+      if (step % (steps / 4) == 0) {
+        const auto u = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.kinematics().displacements);
+        history.push_back(u(centre, 2));
+      }
+    }
+    const auto energies = solver.energies();
+    balance = energies.balanceError();
+    return std::make_pair(history, solver.criticalTimeStep());
+  };
+  const std::string solver = "{type: explicit, steps: 1}";
+  double wholeBalance = 0.0, quarterBalance = 0.0;
+  // First bending period of the clamped plate: 2 pi / (35.99 / a^2 sqrt(D / rho t)) = 11 ms.
+  const double timeStep = 1.0e-6;
+  const int steps = 6000;  // the first half period and a little more
+  const auto whole = centreHistory(clampedPlateModel("{generator: plate, length-x: 1.0, length-y: 1.0, spacing: 0.05}",
+                                                     "{default: pd}", "{}", fourClamps, solver),
+                                   timeStep, steps, wholeBalance);
+  const auto quarter = centreHistory(quarterClampedPlate(20, "{default: pd}", solver), timeStep, steps, quarterBalance);
+  ASSERT_LT(timeStep, 0.8 * std::min(whole.second, quarter.second));
+  ASSERT_EQ(whole.first.size(), quarter.first.size());
+  const double peak = *std::max_element(whole.first.begin(), whole.first.end());
+  for (std::size_t k = 0; k < whole.first.size(); ++k) {
+    std::printf("t = %.1f ms: centre w whole %.6e m, quarter %.6e m\n", 1e3 * timeStep * steps * (k + 1) / 4.0,
+                whole.first[k], quarter.first[k]);
+    EXPECT_NEAR(quarter.first[k], whole.first[k], 0.005 * peak);
+  }
+  std::printf("energy balance error: whole %.2e, quarter %.2e\n", wholeBalance, quarterBalance);
+  EXPECT_LT(std::abs(quarterBalance), 1e-3);
 }
 
 TEST(TEST_CATEGORY, clamped_plate_ccm) {

@@ -25,6 +25,10 @@ namespace perishell::assembly {
 
 inline constexpr int dofPerNode = 6;
 
+// Whether a bond may join a node to itself: never in a PD body, but a bond between a node and
+// its own mirror image (assembly/mirror_images.hpp) adds its tangent to the node alone.
+enum class SelfBonds { Refused, Allowed };
+
 template <class MemorySpaceT>
 struct NodalBlockPattern {
   using memory_space = MemorySpaceT;
@@ -193,16 +197,18 @@ void checkQuadNodes(const ExecutionSpaceT& space, LocalIndex numNodes, const Qua
 }
 
 // Throws std::invalid_argument naming the first bond with an end node outside [0, numNodes)
-// or joining a node to itself.
+// or, unless allowed, joining a node to itself.
 template <class ExecutionSpaceT, class BondNodesView>
-void checkBondNodes(const ExecutionSpaceT& space, LocalIndex numNodes, const BondNodesView& bondNodes) {
+void checkBondNodes(const ExecutionSpaceT& space, LocalIndex numNodes, const BondNodesView& bondNodes,
+                    SelfBonds selfBonds) {
+  const bool selfAllowed = selfBonds == SelfBonds::Allowed;
   const LocalIndex numBonds = static_cast<LocalIndex>(bondNodes.extent(0));
   LocalIndex firstBad = std::numeric_limits<LocalIndex>::max();
   Kokkos::parallel_reduce(
       "perishell::checkBondNodes", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numBonds),
       KOKKOS_LAMBDA(const LocalIndex k, LocalIndex& first) {
         const LocalIndex i = bondNodes(k, 0), j = bondNodes(k, 1);
-        const bool bad = i < 0 || i >= numNodes || j < 0 || j >= numNodes || i == j;
+        const bool bad = i < 0 || i >= numNodes || j < 0 || j >= numNodes || (i == j && !selfAllowed);
         if (bad && k < first) first = k;
       },
       Kokkos::Min<LocalIndex>(firstBad));
@@ -226,12 +232,13 @@ void checkBondNodes(const ExecutionSpaceT& space, LocalIndex numNodes, const Bon
 // of each element and bond by binary search in the sorted block rows. quads or bondNodes may
 // have 0 rows; a node in no element and no bond gets its diagonal block alone, so the matrix
 // stays square and a Dirichlet elimination can pin its DOF. Throws std::invalid_argument for
-// a node index out of range or a bond joining a node to itself.
+// a node index out of range or a bond joining a node to itself (unless selfBonds allows it).
 template <class ExecutionSpaceT>
 NodalBlockPattern<typename ExecutionSpaceT::memory_space> buildNodalBlockPattern(
     const ExecutionSpaceT& space, LocalIndex numNodes,
     const QuadConnectivityView<typename ExecutionSpaceT::memory_space>& quads,
-    const Kokkos::View<LocalIndex* [2], Kokkos::LayoutRight, typename ExecutionSpaceT::memory_space>& bondNodes) {
+    const Kokkos::View<LocalIndex* [2], Kokkos::LayoutRight, typename ExecutionSpaceT::memory_space>& bondNodes,
+    SelfBonds selfBonds = SelfBonds::Refused) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   using MemorySpaceT = typename ExecutionSpaceT::memory_space;
   using Policy = Kokkos::RangePolicy<ExecutionSpaceT>;
@@ -242,7 +249,7 @@ NodalBlockPattern<typename ExecutionSpaceT::memory_space> buildNodalBlockPattern
     throw std::invalid_argument("buildNodalBlockPattern: " + std::to_string(numNodes) +
                                 " nodes exceed the LocalIndex range of 6-DOF columns");
   detail::checkQuadNodes(space, numNodes, quads);
-  detail::checkBondNodes(space, numNodes, bondNodes);
+  detail::checkBondNodes(space, numNodes, bondNodes, selfBonds);
   const LocalIndex numElements = static_cast<LocalIndex>(quads.extent(0));
   const LocalIndex numBonds = static_cast<LocalIndex>(bondNodes.extent(0));
 

@@ -5,6 +5,7 @@
 // every element that is not pure PD, with the hybrid section D_Hb per Gauss point
 // (coupling/morphing.hpp). A 100 % PD model gives every node alpha = 1 and no shell
 // element; a 0 % PD model no PD node and every element with the full section.
+#include <perishell/assembly/mirror_images.hpp>
 #include <perishell/coupling/alpha_field.hpp>
 #include <perishell/coupling/morphing.hpp>
 #include <perishell/model/model.hpp>
@@ -65,6 +66,7 @@ struct CouplingInputs {
   std::vector<mesh::CrackSegment> preCracks;
   deck::Transition transition;  // width 0: 2 delta
   LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max();  // the support layer's first node
+  mesh::SupportLayer supportLayer;  // its mirrored nodes and shares (assembly/mirror_images.hpp)
   // The CCM elements' formulation: MITC4 for both solvers, the one-point element for explicit runs.
   shell::ShellElementKind shellElement = shell::ShellElementKind::Mitc4;
 };
@@ -114,7 +116,8 @@ CoupledBodies<typename ExecutionSpaceT::memory_space> makeCoupledBodies(
   // No bond carrier (0 % PD): an empty body, and no microbeam checks (a pure CCM model may have nu > 1/3).
   if (numBodyNodes > 0)
     bodies.pdBody = pd::makePdBody(space, hostMesh, bodies.pdNodes, inputs.material, inputs.horizon,
-                                   inputs.gridSpacing, inputs.preCracks, atCcmInterface, inputs.firstHeldNode);
+                                   inputs.gridSpacing, inputs.preCracks, atCcmInterface, inputs.firstHeldNode,
+                                   inputs.supportLayer.mirrorImages);
   else
     bodies.pdBody = emptyPdBody<MemorySpaceT>();
 
@@ -132,6 +135,8 @@ CoupledBodies<typename ExecutionSpaceT::memory_space> makeCoupledBodies(
       "perishell::coupling::scatterAlphaBar", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numBodyNodes),
       KOKKOS_LAMBDA(const LocalIndex k) { alphaBar(bodyNodes(k)) = bodyAlphaBar(k); });
   bodies.pdBody = pd::indexByMeshNodes(space, bodies.pdBody, hostMesh, bodies.pdNodes, inputs.material.thickness);
+  assembly::weighBondsByShare(space, bodies.pdBody,
+                              assembly::makeMirrorImages<MemorySpaceT>(inputs.supportLayer, numNodes));
 
   // CCM elements: all but the pure PD ones (alphaBar = 1 at every node, to round-off).
   const auto hostAlphaBar = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, bodies.alphaBar);
@@ -164,6 +169,7 @@ inline CouplingInputs couplingInputs(const model::Model& model) {
   inputs.preCracks = model.preCrackSegments();
   inputs.transition = model.deck.zones.transition;
   inputs.firstHeldNode = model.supportLayer.firstNode;
+  inputs.supportLayer = model.supportLayer;
   if (model.deck.solver.type == deck::SolverType::Explicit) {
     const auto& settings = model.deck.solver.explicitSettings;
     using ShellElement = deck::ExplicitSettings::ShellElement;

@@ -6,6 +6,7 @@
 // §5). It therefore holds the material part (paper K_L) and the initial-stress part (K_S),
 // plus the frame-rotation terms the paper drops (K_N). Symmetrised for CG: the asymmetric
 // remainder is proportional to the end moments and vanishes with them.
+#include <perishell/assembly/mirror_images.hpp>
 #include <perishell/pd/bond_forces.hpp>
 
 namespace perishell::pd {
@@ -51,12 +52,14 @@ KOKKOS_INLINE_FUNCTION void microbeamTangent(const Micromoduli& c, const Microbe
 
 // Adds every intact bond's tangent in the given form, scaled by its volume weight, into the CRS values through
 // the pattern's precomputed slots (one thread per bond, atomic_add: paper §3.2.1). The
-// pattern's bond b is the body's half bond b, its ends mapped to the pattern's node numbers.
+// pattern's bond b is the body's half bond b, its ends mapped to the pattern's node numbers:
+// the nodes that carry their DOFs, a mirror image's end mapped onto its master's (images).
 template <class ExecutionSpaceT, class MemorySpaceT, class PatternT>
 void assembleBondTangent(const ExecutionSpaceT& space, const PdBody<MemorySpaceT>& body,
                          const PdKinematics<MemorySpaceT>& state, const BondFlagView<MemorySpaceT>& intact,
                          const PatternT& pattern, const VectorView<MemorySpaceT>& values,
-                         TangentForm form = TangentForm::Symmetric) {
+                         TangentForm form = TangentForm::Symmetric,
+                         const assembly::MirrorImages<MemorySpaceT>& images = {}) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   Kokkos::parallel_for(
       "perishell::pd::assembleBondTangent", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.bonds.numBonds()),
@@ -72,6 +75,7 @@ void assembleBondTangent(const ExecutionSpaceT& space, const PdBody<MemorySpaceT
         const double weight = bondVolumeWeight(body, i, j, b);
         for (int r = 0; r < 12; ++r)
           for (int s = 0; s < 12; ++s) tangent[r][s] *= weight;
+        images.mapBondTangent(i, j, tangent);
         pattern.atomicAddBondMatrix(static_cast<LocalIndex>(b), tangent, values);
       });
 }

@@ -5,6 +5,7 @@
 // material (model.md §1-3).
 #include <perishell/mesh/free_edges.hpp>
 #include <perishell/mesh/node_geometry.hpp>
+#include <perishell/mesh/support_layer.hpp>
 #include <perishell/pd/neighbor_search.hpp>
 #include <perishell/core/rotation.hpp>
 #include <perishell/pd/pd_body.hpp>
@@ -125,11 +126,23 @@ KOKKOS_INLINE_FUNCTION void solveShiftedCholesky(double A[n][n], double b[n], do
 // keep the weights of the uncut lattice, as nodes along a crack that opens in the run do.
 // Fitting the cut bonds made the faces above and below a pre-crack (cut from one side only,
 // docs/model-setup.md) differ, and the glass plate 4.1.2 branched lopsidedly.
+// images: a mirrored support-layer node (assembly/mirror_images.hpp) stands for its master's
+// mirror image, so its end of a bond takes the master's factors for the reflected direction:
+// a bond to it and its mirror image then have one scale, that of the whole structure's bond.
+// Its own factors, fitted to the layer's outer rim, made a clamped quarter plate with two
+// symmetry planes 10 % too stiff.
+template <class MemorySpaceT>
+struct ImageQuadrature {
+  Kokkos::View<LocalIndex*, MemorySpaceT> master;  // per body node: its master's index, or -1
+  Kokkos::View<double* [9], Kokkos::LayoutRight, MemorySpaceT> reflection;  // master side to image side
+};
+
 template <class ExecutionSpaceT, class MemorySpaceT>
 void computeStiffnessScales(const ExecutionSpaceT& space, PdBody<MemorySpaceT>& body, double horizon,
                             double thickness,
                             const Kokkos::View<const std::uint8_t*, MemorySpaceT>& nodesAtCcmInterface = {},
-                            const std::optional<BondList<MemorySpaceT>>& quadratureBonds = std::nullopt) {
+                            const std::optional<BondList<MemorySpaceT>>& quadratureBonds = std::nullopt,
+                            const ImageQuadrature<MemorySpaceT>& images = {}) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   using detail::numHarmonics;
   const double pi = 3.14159265358979323846;
@@ -199,6 +212,7 @@ void computeStiffnessScales(const ExecutionSpaceT& space, PdBody<MemorySpaceT>& 
         }
       });
   const auto bodyBonds = body.bonds;
+  const bool hasImages = images.master.extent(0) > 0;
   body.stiffnessScale = decltype(body.stiffnessScale)("pd stiffness scale", bodyBonds.numBonds());
   const auto scale = body.stiffnessScale;
   Kokkos::parallel_for(
@@ -210,13 +224,21 @@ void computeStiffnessScales(const ExecutionSpaceT& space, PdBody<MemorySpaceT>& 
                              positions(ends[1], 2) - positions(ends[0], 2)};
         for (int m = 0; m < 2; ++m) {
           double sum = 0.0;
-          for (const LocalIndex node : ends) {
+          for (const LocalIndex end : ends) {
+            LocalIndex node = end;
+            double direction[3] = {d[0], d[1], d[2]};
+            if (hasImages && images.master(end) >= 0) {  // the reflected bond at the master
+              node = images.master(end);
+              for (int r = 0; r < 3; ++r)
+                direction[r] = images.reflection(end, r) * d[0] + images.reflection(end, 3 + r) * d[1] +
+                               images.reflection(end, 6 + r) * d[2];
+            }
             const double n[3] = {normals(node, 0), normals(node, 1), normals(node, 2)};
             double t1[3], t2[3];
             detail::tangentBasis(n, t1, t2);
             double factors[1 + numHarmonics];
             for (int k = 0; k <= numHarmonics; ++k) factors[k] = nodeFactors(node, m, k);
-            sum += detail::endFactor(d, t1, t2, factors);
+            sum += detail::endFactor(direction, t1, t2, factors);
           }
           scale(b, m) = 0.5 * sum;
         }
@@ -285,6 +307,32 @@ PdNodeBonds<typename ExecutionSpaceT::memory_space> buildBondsAmong(
   return result;
 }
 
+// The images among pdNodes, indexed as they are (computeStiffnessScales); empty views when
+// there are none.
+template <class MemorySpaceT>
+ImageQuadrature<MemorySpaceT> imageQuadrature(const Kokkos::View<const LocalIndex*, Kokkos::HostSpace>& pdNodes,
+                                              const std::vector<mesh::MirrorImage>& mirrorImages) {
+  ImageQuadrature<MemorySpaceT> result;
+  if (mirrorImages.empty()) return result;
+  const LocalIndex numPdNodes = static_cast<LocalIndex>(pdNodes.extent(0));
+  const auto bodyIndex = [&](LocalIndex meshNode) -> LocalIndex {
+    const LocalIndex* at = std::lower_bound(pdNodes.data(), pdNodes.data() + numPdNodes, meshNode);
+    return at != pdNodes.data() + numPdNodes && *at == meshNode ? static_cast<LocalIndex>(at - pdNodes.data()) : -1;
+  };
+  Kokkos::View<LocalIndex*, Kokkos::HostSpace> master("pd image masters", numPdNodes);
+  Kokkos::View<double* [9], Kokkos::LayoutRight, Kokkos::HostSpace> reflection("pd image reflections", numPdNodes);
+  Kokkos::deep_copy(master, LocalIndex(-1));
+  for (const auto& image : mirrorImages) {
+    const LocalIndex node = bodyIndex(image.node), source = bodyIndex(image.master);
+    if (node < 0 || source < 0) continue;
+    master(node) = source;
+    for (int k = 0; k < 9; ++k) reflection(node, k) = image.reflection[k];
+  }
+  result.master = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, master);
+  result.reflection = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, reflection);
+  return result;
+}
+
 // The PD body of the nodes pdNodes (as buildBondsAmong). nodesAtCcmInterface: per entry of
 // pdNodes, or empty (computeStiffnessScales). Throws std::invalid_argument on parameters the
 // model rejects.
@@ -294,7 +342,8 @@ PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
     const Kokkos::View<const LocalIndex*, Kokkos::HostSpace>& pdNodes, const PdMaterial& material, double horizon,
     double gridSpacing, const std::vector<mesh::CrackSegment>& preCracks,
     const Kokkos::View<const std::uint8_t*, Kokkos::HostSpace>& nodesAtCcmInterface = {},
-    LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max()) {
+    LocalIndex firstHeldNode = std::numeric_limits<LocalIndex>::max(),
+    const std::vector<mesh::MirrorImage>& mirrorImages = {}) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   using MemorySpaceT = typename ExecutionSpaceT::memory_space;
   PdBody<MemorySpaceT> body;
@@ -329,10 +378,18 @@ PdBody<typename ExecutionSpaceT::memory_space> makePdBody(
     uncutBonds = buildBondList(space, body.referencePositions, horizon, gridSpacing,
                                Kokkos::View<const mesh::CrackSegment*, MemorySpaceT>(),
                                std::numeric_limits<LocalIndex>::max(), nodeBonds.boundary);
+  // An image is its master's mirror: the same volume (the layer's outer row would have half).
+  const auto images = imageQuadrature<MemorySpaceT>(pdNodes, mirrorImages);
+  if (images.master.extent(0) > 0)
+    Kokkos::parallel_for(
+        "perishell::pd::makePdBody::imageVolumes", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numPdNodes),
+        KOKKOS_LAMBDA(const LocalIndex k) {
+          if (images.master(k) >= 0) volumes(k) = volumes(images.master(k));
+        });
   computeStiffnessScales(space, body, horizon, material.thickness,
                          Kokkos::View<const std::uint8_t*, MemorySpaceT>(
                              Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, nodesAtCcmInterface)),
-                         uncutBonds);
+                         uncutBonds, images);
   return body;
 }
 

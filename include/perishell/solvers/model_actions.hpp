@@ -31,6 +31,7 @@ ExternalActions<MemorySpaceT> makeExternalActions(const model::Model& model) {
   actions.prescribedValue = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, supports.prescribedValue);
   actions.supportCurveIndex = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, supports.curveIndex);
   for (const auto& name : supports.curves) actions.supportCurves.push_back(*curveNamed(name));
+  actions.mirrorImages = assembly::makeMirrorImages<MemorySpaceT>(model.supportLayer, numNodes);
   return actions;
 }
 

@@ -111,6 +111,7 @@ class CentralDifferenceSolver {
         kineticEnergy_("pd kinetic energy", body_.numNodes()) {
     validate();
     inertia_ = computeNodalInertia(space_, body_, shell_, options_.density, options_.thickness);
+    assembly::weighInertiaByShare(space_, actions_.mirrorImages, inertia_.mass, inertia_.rotaryInertia);
     applyInitialSupportValues();
     criticalTimeStep_ = estimateCriticalTimeStep();
     timeStep_ = options_.timeStep > 0.0 ? options_.timeStep : options_.safetyFactor * criticalTimeStep_;
@@ -192,6 +193,7 @@ class CentralDifferenceSolver {
     discardedFlags_ = pd::BondFlagView<MemorySpace>();
     validate();
     inertia_ = computeNodalInertia(space_, body_, shell_, options_.density, options_.thickness);
+    assembly::weighInertiaByShare(space_, actions_.mirrorImages, inertia_.mass, inertia_.rotaryInertia);
     criticalTimeStep_ = estimateCriticalTimeStep();
     initialEnergy_ += energies().stored() - before;
     // A step chosen from the estimate follows it down; one the deck fixed must stay below it.
@@ -270,6 +272,7 @@ class CentralDifferenceSolver {
           rotation::rotateBySpatialIncrement(initial + 3, q);
           for (int k = 0; k < 4; ++k) rotations(node, k) = q[k];
         });
+    assembly::imposeMirrorImages(space_, actions_.mirrorImages, displacements, rotations);
   }
 
   void computeForces(bool withStrainEnergy) {
@@ -292,6 +295,7 @@ class CentralDifferenceSolver {
     if (shell_)
       shell::subtractShellForces(space_, *shell_, state, outputs.forces, outputs.strainEnergy,
                                  withEnergy ? hourglassEnergy_ : VectorView<MemorySpace>());
+    assembly::condenseImageForces(space_, actions_.mirrorImages, outputs.forces);
   }
 
   // The leapfrog update of one node's six DOFs; work and dissipation accumulate per node
@@ -352,6 +356,7 @@ class CentralDifferenceSolver {
           dampingWork(node) += dissipated;
           if (monitor) kinetic(node) = kineticNode;
         });
+    assembly::imposeMirrorImages(space_, actions_.mirrorImages, displacements, rotations);
   }
 
   // Kinetic energy from the stored half-step velocities alone (between steps).
@@ -495,6 +500,7 @@ class CentralDifferenceSolver {
             rotation::rotateBySpatialIncrement(spin, q);
             for (int k = 0; k < 4; ++k) trial.rotations(node, k) = q[k];
           });
+      assembly::imposeMirrorImages(space_, actions_.mirrorImages, trial.displacements, trial.rotations);
       fillContiguous(space_, trialForces, 0.0);
       const pd::BondForceOutputs<MemorySpace> outputs{trialForces, VectorView<MemorySpace>(), scratchEnergy, scratchIntact};
       addInternalForces(trial, outputs);

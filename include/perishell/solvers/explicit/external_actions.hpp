@@ -3,6 +3,7 @@
 // load patterns scaled by their curve at each step, and prescribed DOFs whose velocity
 // follows their value times the change of their curve. Built once from the host data of
 // model/nodal_loads.hpp; per step only the curve factors (a few doubles) travel.
+#include <perishell/assembly/mirror_images.hpp>
 #include <perishell/io/deck.hpp>
 #include <perishell/pd/pd_body.hpp>
 
@@ -27,6 +28,8 @@ struct ExternalActions {
   pd::NodalVectorView<MemorySpaceT> prescribedValue;            // [m, rad]
   Kokkos::View<std::int8_t* [6], Kokkos::LayoutRight, MemorySpaceT> supportCurveIndex;  // -1: constant
   std::vector<deck::Curve> supportCurves;
+  // Support-layer nodes that move as images of mesh nodes; constrainedDofs holds all their DOFs.
+  assembly::MirrorImages<MemorySpaceT> mirrorImages;
 
   int numPatterns() const { return static_cast<int>(patternCurves.size()); }
 
@@ -52,6 +55,7 @@ ExternalActions<MemorySpaceT> makeFreeActions(LocalIndex numNodes) {
   actions.prescribedValue = pd::NodalVectorView<MemorySpaceT>("prescribed values", numNodes);
   actions.supportCurveIndex = Kokkos::View<std::int8_t* [6], Kokkos::LayoutRight, MemorySpaceT>("support curves", numNodes);
   Kokkos::deep_copy(actions.supportCurveIndex, std::int8_t(-1));
+  actions.mirrorImages = assembly::makeMirrorImages<MemorySpaceT>(mesh::SupportLayer{}, numNodes);
   return actions;
 }
 

@@ -32,18 +32,20 @@
 
 namespace perishell::solvers {
 
-// The two end nodes of every half bond, as the block pattern takes them (a free function:
+// The nodes that carry the DOFs of every half bond's two ends (a mirror image's master for
+// the image, assembly/mirror_images.hpp), as the block pattern takes them (a free function:
 // nvcc refuses extended lambdas in constructors).
 template <class ExecutionSpaceT, class MemorySpaceT>
-Kokkos::View<LocalIndex* [2], Kokkos::LayoutRight, MemorySpaceT> bondEndNodes(const ExecutionSpaceT& space,
-                                                                             const pd::BondList<MemorySpaceT>& bonds) {
+Kokkos::View<LocalIndex* [2], Kokkos::LayoutRight, MemorySpaceT> bondEndNodes(
+    const ExecutionSpaceT& space, const pd::BondList<MemorySpaceT>& bonds,
+    const assembly::MirrorImages<MemorySpaceT>& images) {
   Kokkos::View<LocalIndex* [2], Kokkos::LayoutRight, MemorySpaceT> nodes("bond end nodes", bonds.numBonds());
   const auto halfBonds = bonds.halfBonds;
   Kokkos::parallel_for(
       "perishell::newton::bondEndNodes", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, nodes.extent(0)),
       KOKKOS_LAMBDA(const RowOffset b) {
-        nodes(b, 0) = halfBonds(b, 0);
-        nodes(b, 1) = halfBonds(b, 1);
+        nodes(b, 0) = images.carrier(halfBonds(b, 0));
+        nodes(b, 1) = images.carrier(halfBonds(b, 1));
       });
   return nodes;
 }

@@ -55,9 +55,11 @@ StaticNewtonSolver<ExecutionSpaceT>::StaticNewtonSolver(const ExecutionSpaceT& s
     intact_ = pd::makeIntactFlags(pd_->bonds, "perishell::newton::intact");
     intactScratch_ = pd::makeIntactFlags(pd_->bonds, "perishell::newton::intactScratch");
     fractureScratch_ = VectorView<Memory>("perishell::newton::fractureScratch", numNodes);
-    bondNodes = bondEndNodes(space_, pd_->bonds);
+    bondNodes = bondEndNodes(space_, pd_->bonds, actions_.mirrorImages);
   }
-  pattern_ = assembly::buildNodalBlockPattern(space_, numNodes, quads, bondNodes);
+  pattern_ = assembly::buildNodalBlockPattern(space_, numNodes, quads, bondNodes,
+                                              actions_.mirrorImages.empty() ? assembly::SelfBonds::Refused
+                                                                            : assembly::SelfBonds::Allowed);
   values_ = VectorView<Memory>("perishell::newton::tangentValues", pattern_.columns.extent(0));
   markConstrainedDofs();
   freeDofs_ = countFreeDofs();
@@ -391,6 +393,7 @@ auto StaticNewtonSolver<ExecutionSpaceT>::computeOutOfBalance(double loadFactor)
     pd::computeBondForces(space_, deck::ForceKernel::NodeGather, *pd_, state_, intact_, outputs);
   }
   if (shell_) shell::subtractShellForces(space_, *shell_, state_, r);
+  assembly::condenseImageForces(space_, actions_.mirrorImages, r);
   return {outOfBalanceNorm(false), std::max(std::sqrt(loadSquared), outOfBalanceNorm(true))};
 }
 
@@ -607,7 +610,8 @@ template <class ExecutionSpaceT>
 void StaticNewtonSolver<ExecutionSpaceT>::assembleTangent() {
   Kokkos::deep_copy(space_, values_, 0.0);
   if (shell_) shell::assembleShellTangent(space_, *shell_, state_, pattern_, values_, options_.tangent);
-  if (pd_) pd::assembleBondTangent(space_, *pd_, state_, intact_, pattern_, values_, options_.tangent);
+  if (pd_)
+    pd::assembleBondTangent(space_, *pd_, state_, intact_, pattern_, values_, options_.tangent, actions_.mirrorImages);
 }
 
 template <class ExecutionSpaceT>
@@ -638,6 +642,7 @@ void StaticNewtonSolver<ExecutionSpaceT>::applyPrescribedValues(double loadFacto
         rotation::exponential(theta, updated);
         for (int k = 0; k < 4; ++k) q(node, k) = updated[k];
       });
+  assembly::imposeMirrorImages(space_, actions_.mirrorImages, u, q);
 }
 
 template <class ExecutionSpaceT>
@@ -654,6 +659,7 @@ void StaticNewtonSolver<ExecutionSpaceT>::applyCorrection(double eta) {
         rotation::rotateBySpatialIncrement(phi, quaternion);
         for (int k = 0; k < 4; ++k) q(node, k) = quaternion[k];
       });
+  assembly::imposeMirrorImages(space_, actions_.mirrorImages, u, q);
 }
 
 template <class ExecutionSpaceT>
