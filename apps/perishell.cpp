@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -154,9 +155,10 @@ void printUnlayeredPdSupports(const perishell::model::Model& model) {
   for (std::size_t k = 0; k < model.pdNodes.extent(0); ++k) isPd[model.pdNodes(k)] = 1;
   std::map<std::string, std::string> supportsOfSet;
   for (const auto& support : model.deck.supports) {
-    const auto& layered = model.supportLayer.nodesOfSet;
-    const auto& skipped = model.supportLayer.skippedSets;
-    if (layered.count(support.set) || std::find(skipped.begin(), skipped.end(), support.set) != skipped.end())
+    const auto& layer = model.supportLayer;
+    const auto& skipped = layer.skippedSets;
+    if (layer.nodesOfSet.count(support.set) || layer.mirroredNodesOfSet.count(support.set) ||
+        std::find(skipped.begin(), skipped.end(), support.set) != skipped.end())
       continue;
     const auto nodes = model.supportNodes(support);
     if (std::count_if(nodes.begin(), nodes.end(), [&](perishell::LocalIndex node) { return isPd[node]; }) < 2) continue;
@@ -169,8 +171,9 @@ void printUnlayeredPdSupports(const perishell::model::Model& model) {
                 "shell, or make the region along it CCM\n",
                 "layer", set.c_str(), names.c_str(),
                 model.deck.peridynamics.supportLayer
-                    ? "only clamped edges get one (a mirrored layer for symmetry and simply supported edges is "
-                      "not built yet)"
+                    ? "its DOFs make no mirror image (a layer needs a clamp, a symmetry or antisymmetry plane, a "
+                      "diaphragm or a hinge held at zero, docs/model-setup.md; an edge holding w alone keeps the "
+                      "free edge's weights, which already leave its moment zero)"
                     : "peridynamics.support-layer is off");
 }
 
@@ -185,12 +188,24 @@ void printMeshNotes(const perishell::model::Model& model) {
                 static_cast<int>(second), x(first, 0), x(first, 1), x(first, 2));
   }
   if (model.numLayerNodes() > 0) {
-    std::string sets;
-    for (const auto& [set, nodes] : model.supportLayer.nodesOfSet) sets += (sets.empty() ? "" : ", ") + set;
-    std::printf("  %-10s %s nodes, %s held beyond the clamped PD edges of %s (peridynamics.support-layer)\n",
-                "layer", withThousands(model.numLayerNodes()).c_str(),
-                elementCounts(model.shell.mesh, model.numMeshElements(), model.shell.mesh.numElements()).c_str(),
-                sets.c_str());
+    const auto namesAndCount = [](const std::map<std::string, std::vector<perishell::LocalIndex>>& nodesOfSet) {
+      std::string sets;
+      std::set<perishell::LocalIndex> nodes;
+      for (const auto& [set, members] : nodesOfSet) {
+        sets += (sets.empty() ? "" : ", ") + set;
+        nodes.insert(members.begin(), members.end());
+      }
+      return std::make_pair(sets, static_cast<long long>(nodes.size()));
+    };
+    const auto [held, numHeld] = namesAndCount(model.supportLayer.nodesOfSet);
+    const auto [mirrored, numMirrored] = namesAndCount(model.supportLayer.mirroredNodesOfSet);
+    std::printf("  %-10s %s nodes, %s beyond supported PD edges (peridynamics.support-layer)", "layer",
+                withThousands(model.numLayerNodes()).c_str(),
+                elementCounts(model.shell.mesh, model.numMeshElements(), model.shell.mesh.numElements()).c_str());
+    if (numHeld > 0) std::printf("; %s held beyond the clamps %s", withThousands(numHeld).c_str(), held.c_str());
+    if (numMirrored > 0)
+      std::printf("; %s moving as mirror images beyond %s", withThousands(numMirrored).c_str(), mirrored.c_str());
+    std::printf("\n");
   }
   for (const auto& set : model.supportLayer.skippedSets)
     std::printf("  %-10s no support layer beyond set '%s': the mesh goes on beyond each of its free edges (a slit "

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <deque>
 #include <map>
 #include <stdexcept>
 #include <set>
@@ -36,6 +37,28 @@ std::array<double, 9> compose(const std::array<double, 9>& second, const std::ar
 
 }  // namespace
 
+FreeEdge mirrorPlaneEdge(const FreeEdge& edge, std::uint8_t heldDofs) {
+  // The outward normal's part in the held (or else the free) translations, kept normal to
+  // the edge, where it lies within 30 degrees of them.
+  const auto projected = [&](bool heldAxes) {
+    Point p{0.0, 0.0, 0.0};
+    for (int a = 0; a < 3; ++a)
+      if (((heldDofs >> a) & 1u) == (heldAxes ? 1u : 0u)) p[a] = edge.outward[a];
+    return p - dot(p, edge.tangent) * edge.tangent;
+  };
+  constexpr double within30Degrees = 0.866;
+  FreeEdge plane = edge;
+  for (const bool heldAxes : {true, false}) {
+    const Point p = projected(heldAxes);
+    if (std::sqrt(dot(p, p)) < within30Degrees) continue;
+    plane.outward = unit(p);
+    const Point z = cross(plane.outward, edge.tangent);
+    plane.normal = dot(z, edge.normal) >= 0.0 ? z : -1.0 * z;
+    break;
+  }
+  return plane;
+}
+
 std::optional<MirrorMaps> mirrorMaps(const FreeEdge& edge, std::uint8_t heldDofs) {
   // A component along `axis` is held when the axis lies in the span of the held global axes.
   const auto held = [&](const Point& axis, int firstDof) {
@@ -44,7 +67,8 @@ std::optional<MirrorMaps> mirrorMaps(const FreeEdge& edge, std::uint8_t heldDofs
       if (heldDofs & (1u << (firstDof + a))) inSpan += axis[a] * axis[a];
     return inSpan >= 1.0 - 1e-6;
   };
-  const Point n = edge.outward, t = edge.tangent, z = edge.normal;
+  const FreeEdge plane = mirrorPlaneEdge(edge, heldDofs);
+  const Point n = plane.outward, t = plane.tangent, z = plane.normal;
   enum class Part { Free, Held, Even, Odd };
   const bool un = held(n, 0), ut = held(t, 0), w = held(z, 0), thetaT = held(t, 3);
   const Part membrane = un && ut ? Part::Held : un ? Part::Even : ut ? Part::Odd : Part::Free;
@@ -141,13 +165,15 @@ class LayerBuilder {
           owner = static_cast<int>(r);
       if (owner < 0) continue;
       std::optional<MirrorMaps> maps;
+      const FreeEdge* imaged = &edge;
       if (requests[owner].motion == LayerMotion::Mirrored) {
         maps = mirrorMaps(edge, requests[owner].heldDofs);
         if (!maps) continue;
+        imaged = &planeEdges_.emplace_back(mirrorPlaneEdge(edge, requests[owner].heldDofs));
       }
       result[owner].hasFreeEdges = true;
       if (materialBeyond(mesh_, realNodes_, edge, depth_)) continue;
-      edges.push_back({&edge, owner, maps});
+      edges.push_back({imaged, owner, maps});
       result[owner].hasRoom = true;
     }
     const auto isHeld = [&](int set) { return requests[set].motion == LayerMotion::Held; };
@@ -380,6 +406,7 @@ class LayerBuilder {
   double largestDiameter_ = 0.0;
   NodeGrid realNodes_, centroidGrid_;
   std::vector<FreeEdge> freeEdges_;
+  std::deque<FreeEdge> planeEdges_;  // mirrored edges in their mirror plane's frame (stable addresses)
   std::vector<double> coordinates_;                // new layer nodes, x y z each
   std::vector<std::array<LocalIndex, 4>> quads_;  // layer elements
   std::set<std::array<LocalIndex, 4>> elementKeys_;

@@ -396,8 +396,10 @@ void addSupportLayer(Model& model) {
 
 std::vector<LocalIndex> Model::supportNodes(const deck::Support& support) const {
   auto nodes = shell.sets.nodesOfNodeOrEdgeSet(support.set);
-  const auto layer = supportLayer.nodesOfSet.find(support.set);
-  if (layer != supportLayer.nodesOfSet.end()) nodes.insert(nodes.end(), layer->second.begin(), layer->second.end());
+  for (const auto* layerNodes : {&supportLayer.nodesOfSet, &supportLayer.mirroredNodesOfSet}) {
+    const auto layer = layerNodes->find(support.set);
+    if (layer != layerNodes->end()) nodes.insert(nodes.end(), layer->second.begin(), layer->second.end());
+  }
   return nodes;
 }
 

@@ -154,8 +154,10 @@ void imposeMirrorImages(const ExecutionSpaceT& space, const MirrorImages<MemoryS
       });
 }
 
-// f_M += A^T f_L for every image L of M, then f_L = 0: the images' forces (and moments) act on
-// the DOFs that carry them.
+// f_M += A^T f_L for every image L of M: the images' forces (and moments) act on the DOFs that
+// carry them. What is left at L, f_L - A^T f_L, is the force the layer, as a support, exerts
+// beyond what its master takes (an odd image of w carries the edge's shear): the images hold
+// all their DOFs, so it is their reaction, and the forces over all nodes still sum to zero.
 template <class ExecutionSpaceT, class MemorySpaceT>
 void condenseImageForces(const ExecutionSpaceT& space, const MirrorImages<MemorySpaceT>& images,
                          const pd::NodalVectorView<MemorySpaceT>& forces) {
@@ -168,13 +170,17 @@ void condenseImageForces(const ExecutionSpaceT& space, const MirrorImages<Memory
         const LocalIndex master = images.gatherMasters(m);
         for (LocalIndex slot = images.gatherOffsets(m); slot < images.gatherOffsets(m + 1); ++slot) {
           const LocalIndex k = images.gatherImages(slot), image = images.nodes(k);
+          double carried[6];
           for (int part = 0; part < 2; ++part)
             for (int c = 0; c < 3; ++c) {
               double sum = 0.0;
               for (int r = 0; r < 3; ++r) sum += images.maps(k, 9 * part + 3 * r + c) * forces(image, 3 * part + r);
-              forces(master, 3 * part + c) += sum;
+              carried[3 * part + c] = sum;
             }
-          for (int d = 0; d < 6; ++d) forces(image, d) = 0.0;
+          for (int d = 0; d < 6; ++d) {
+            forces(master, d) += carried[d];
+            forces(image, d) -= carried[d];
+          }
         }
       });
 }

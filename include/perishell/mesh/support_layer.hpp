@@ -38,8 +38,8 @@ struct MirrorMaps {
   std::array<double, 9> displacement, rotation;
 };
 
-// The maps across a free edge (frame: n the outward in-plane normal, t the tangent, z the
-// element normal) of a set holding heldDofs at zero; none where the held DOFs make neither
+// The maps across a free edge (frame, mirrorPlaneEdge's: n the mirror plane's normal, t the
+// tangent, z normal to both) of a set holding heldDofs at zero; none where the held DOFs make neither
 // part of the motion a mirror image. Per part, in the edge frame (model-setup.md):
 // membrane (u_n, u_t, theta_z): u_n and u_t held -> held (map 0); u_n held -> even image
 // (u_n odd, u_t even, theta_z odd); u_t held -> odd image; bending (w, theta_n, theta_t):
@@ -47,6 +47,13 @@ struct MirrorMaps {
 // w held -> odd image. Even-even is the reflection of a symmetry plane, odd-odd its
 // antisymmetric counterpart (a rigid diaphragm), membrane-even with bending-odd a hinge.
 std::optional<MirrorMaps> mirrorMaps(const FreeEdge& edge, std::uint8_t heldDofs);
+
+// The edge in its mirror plane's frame: outward the plane's normal, taken from the held
+// translations (a symmetry plane holds the displacement across it) or else the free ones (a
+// diaphragm leaves free the one along the shell's generator) where the element's outward
+// normal lies within 30 degrees of them, so that a curved shell's image across its symmetry
+// plane is the shell itself; else the element's frame.
+FreeEdge mirrorPlaneEdge(const FreeEdge& edge, std::uint8_t heldDofs);
 
 // A layer node that moves as the image of a node of the deck's mesh: at
 // reflection (x_master - o) + o for a point o of its mirror line (row-major 3 x 3: one

@@ -46,7 +46,8 @@ struct Model {
             Kokkos::subview(shell.mesh.quads, std::make_pair(LocalIndex(0), numMeshElements()), Kokkos::ALL)};
   }
   LocalIndex numLayerNodes() const { return shell.mesh.numNodes() - numMeshNodes(); }
-  // The nodes a support holds: its set's, and the support layer's beyond the set's edges.
+  // The nodes a support holds: its set's, and the support layer's beyond the set's edges
+  // (held, or mirrored: their reactions are the layer's, assembly/mirror_images.hpp).
   std::vector<LocalIndex> supportNodes(const deck::Support& support) const;
   // The paper's "PD element ratio": PD elements / all elements (of the deck's mesh).
   double pdRatio() const { return numMeshElements() > 0 ? double(numPdElements) / numMeshElements() : 0.0; }

@@ -38,7 +38,7 @@ namespace perishell::solvers {
 template <class ExecutionSpaceT, class MemorySpaceT>
 Kokkos::View<LocalIndex* [2], Kokkos::LayoutRight, MemorySpaceT> bondEndNodes(
     const ExecutionSpaceT& space, const pd::BondList<MemorySpaceT>& bonds,
-    const assembly::MirrorImages<MemorySpaceT>& images) {
+    const assembly::MirrorImages<MemorySpaceT>& images = {}) {
   Kokkos::View<LocalIndex* [2], Kokkos::LayoutRight, MemorySpaceT> nodes("bond end nodes", bonds.numBonds());
   const auto halfBonds = bonds.halfBonds;
   Kokkos::parallel_for(
