@@ -319,14 +319,12 @@ void checkPreCrackNormals(const Model& model) {
 // The supports' sets that get a support layer (docs/model-setup.md, "Supports on PD regions"):
 // held where their DOFs clamp a PD edge (all three displacements and every rotation but, at
 // most, the drilling one about the shell normal at each of the set's nodes); mirrored where
-// they hold other DOFs at zero, each edge then imaged as mesh::mirrorMaps says.
+// they hold other DOFs, each edge then imaged as mesh::mirrorMaps says (about the prescribed
+// values, assembly/mirror_images.hpp).
 std::vector<mesh::SupportLayerRequest> layerRequests(const Model& model) {
   std::map<std::string, std::uint8_t> dofsOfSet;
-  std::set<std::string> movingSets;  // a nonzero value or a curve: no mirror image
-  for (const auto& support : model.deck.supports) {
+  for (const auto& support : model.deck.supports)
     for (const auto dof : support.dofs) dofsOfSet[support.set] |= std::uint8_t(1u << static_cast<int>(dof));
-    if (support.value != 0.0 || !support.curve.empty()) movingSets.insert(support.set);
-  }
   const auto normals = mesh::computeNodeNormals(Kokkos::DefaultHostExecutionSpace{}, model.shell.mesh);
   std::vector<mesh::SupportLayerRequest> requests;
   for (const auto& [set, dofs] : dofsOfSet) {
@@ -337,10 +335,7 @@ std::vector<mesh::SupportLayerRequest> layerRequests(const Model& model) {
       constexpr double drillingOnly = 1.0 - 1e-6;  // the free rotation axis is the normal
       for (const LocalIndex node : nodes) clamped = clamped && std::abs(normals(node, axis)) >= drillingOnly;
     }
-    if (clamped)
-      requests.push_back({set, std::move(nodes), mesh::LayerMotion::Held, dofs});
-    else if (movingSets.count(set) == 0)
-      requests.push_back({set, std::move(nodes), mesh::LayerMotion::Mirrored, dofs});
+    requests.push_back({set, std::move(nodes), clamped ? mesh::LayerMotion::Held : mesh::LayerMotion::Mirrored, dofs});
   }
   return requests;
 }

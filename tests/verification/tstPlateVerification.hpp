@@ -140,6 +140,53 @@ TEST(TEST_CATEGORY, hinged_plate_pd_with_odd_images) {
   EXPECT_NEAR(-fine.reactionZ, pressure, 1e-8 * pressure);
 }
 
+// A moving symmetry plane: a 100 mm x 20 mm strip, 100 % PD, whose end x = L is pulled by a
+// prescribed u_x = c with the rotations about y and z held (the symmetry plane of a strip
+// twice as long, pulled at both ends). Its layer moves as the even image about the plane's
+// prescribed place, u_x -> 2 c - u_x (assembly/mirror_images.hpp), so the strip stretches
+// uniformly: the reaction is E t W c / L, and the end moves as the prescription says.
+TEST(TEST_CATEGORY, strip_pulled_by_a_moving_symmetry_plane) {
+  using namespace plate_verification_test;
+  const double length = 0.1, width = 0.02, stretch = 1.0e-5, E = 70.0e9, t = 1.0e-3;
+  std::vector<double> errors;
+  for (const std::string layer : {"true", "false"}) {
+    const std::string text = R"(perishell:
+  version: 1
+  mesh:
+    generator: plate
+    length-x: 0.1
+    length-y: 0.02
+    spacing: 0.0025
+  material: {young-modulus: 70.0e9, poisson-ratio: 0.3, density: 2700.0, thickness: 1.0e-3}
+  peridynamics: {support-layer: )" + layer + R"(}
+  zones: {default: pd}
+  supports:
+    fixed: {set: left, dofs: [ux, uz, ry, rz]}
+    pulled: {set: right, dofs: [ux, ry, rz], value: 1.0e-5}
+    pin: {set: bottom-left, dofs: [uy]}
+  loads: {}
+  solver: {type: implicit, increments: 1, tolerance: 1.0e-10, preconditioner: cholesky}
+)";
+    const auto model = perishell::model::buildModel(perishell::parseDeck(text, "strip.yaml"));
+    auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
+    solver.advanceTo(1.0);
+    const auto r = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.outOfBalance());
+    double pull = 0.0;
+    for (const auto& support : model.deck.supports)
+      if (support.name == "pulled")
+        for (const auto node : model.supportNodes(support)) pull -= r(node, 0);
+    const double reference = E * t * width * stretch / length;
+    errors.push_back(pull / reference - 1.0);
+    std::printf("strip pulled by a moving symmetry plane, support-layer %s: %zu mirrored sets, reaction %.6f N, "
+                "E t W c / L = %.6f N, error %+.3f %%\n",
+                layer.c_str(), model.supportLayer.mirroredNodesOfSet.size(), pull, reference,
+                100.0 * errors.back());
+    EXPECT_EQ(model.supportLayer.mirroredNodesOfSet.size(), layer == "true" ? 2u : 0u);
+  }
+  EXPECT_LT(std::abs(errors[0]), 0.005);  // measured -0.24 %
+  EXPECT_LT(std::abs(errors[0]), 0.2 * std::abs(errors[1]));  // -3.9 % without the layer
+}
+
 TEST(TEST_CATEGORY, clamped_plate_ccm) {
   using namespace plate_verification_test;
   const auto result = solveClampedPlate(clampedPlate(20, "{default: ccm}"), "clamped plate CCM a/20");

@@ -128,11 +128,14 @@ MirrorImages<MemorySpaceT> makeMirrorImages(const mesh::SupportLayer& layer, Loc
   return result;
 }
 
-// Moves every image with its master: u_L = A_u u_M, theta_L = A_theta theta_M.
-template <class ExecutionSpaceT, class MemorySpaceT>
+// Moves every image with its master: u_L = A_u u_M + (I - A_u) p_L and theta_L = A_theta
+// theta_M + (I - A_theta) p_theta, p = prescribed(L, d) the value its set's supports prescribe
+// now (zero where they hold nothing): an odd component is the image about the prescribed
+// value (2 p - u_M), a held one the value itself, an even one the master's.
+template <class ExecutionSpaceT, class MemorySpaceT, class PrescribedT>
 void imposeMirrorImages(const ExecutionSpaceT& space, const MirrorImages<MemorySpaceT>& images,
                         const CoordinateView<MemorySpaceT>& displacements,
-                        const pd::RotationView<MemorySpaceT>& rotations) {
+                        const pd::RotationView<MemorySpaceT>& rotations, const PrescribedT& prescribed) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   if (images.empty()) return;
   Kokkos::parallel_for(
@@ -140,19 +143,29 @@ void imposeMirrorImages(const ExecutionSpaceT& space, const MirrorImages<MemoryS
       KOKKOS_LAMBDA(const LocalIndex k) {
         const LocalIndex image = images.nodes(k), master = images.masters(k);
         const double q[4] = {rotations(master, 0), rotations(master, 1), rotations(master, 2), rotations(master, 3)};
-        double theta[3], mappedTheta[3] = {0.0, 0.0, 0.0}, u[3] = {0.0, 0.0, 0.0};
+        double theta[3], held[6];
         rotation::rotationVector(q, theta);
-        for (int r = 0; r < 3; ++r)
+        for (int d = 0; d < 6; ++d) held[d] = prescribed(image, d);
+        double u[3], mappedTheta[3];
+        for (int r = 0; r < 3; ++r) {
+          u[r] = held[r];
+          mappedTheta[r] = held[3 + r];
           for (int c = 0; c < 3; ++c) {
-            u[r] += images.maps(k, 3 * r + c) * displacements(master, c);
-            mappedTheta[r] += images.maps(k, 9 + 3 * r + c) * theta[c];
+            u[r] += images.maps(k, 3 * r + c) * (displacements(master, c) - held[c]);
+            mappedTheta[r] += images.maps(k, 9 + 3 * r + c) * (theta[c] - held[3 + c]);
           }
+        }
         double mapped[4];
         rotation::exponential(mappedTheta, mapped);
         for (int d = 0; d < 3; ++d) displacements(image, d) = u[d];
         for (int d = 0; d < 4; ++d) rotations(image, d) = mapped[d];
       });
 }
+
+// No prescribed motion: the images of a trial state.
+struct NothingPrescribed {
+  KOKKOS_INLINE_FUNCTION double operator()(LocalIndex, int) const { return 0.0; }
+};
 
 // f_M += A^T f_L for every image L of M: the images' forces (and moments) act on the DOFs that
 // carry them. What is left at L, f_L - A^T f_L, is the force the layer, as a support, exerts

@@ -22,14 +22,14 @@ namespace perishell::mesh {
 
 enum class LayerMotion {
   Held,     // the set's supports hold the layer's nodes as the set's (values and curves too)
-  Mirrored  // each layer node follows the image of its master (MirrorMaps), the set holding zeros
+  Mirrored  // each layer node follows the image of its master (MirrorMaps) about the set's values
 };
 
 struct SupportLayerRequest {
   std::string setName;
   std::vector<LocalIndex> nodes;  // the set's nodes, sorted: layers grow beyond its free edges
   LayerMotion motion = LayerMotion::Held;
-  std::uint8_t heldDofs = 0;  // Mirrored: bit d for DOF d (ux uy uz rx ry rz) the set holds at zero
+  std::uint8_t heldDofs = 0;  // Mirrored: bit d for DOF d (ux uy uz rx ry rz) the set holds
 };
 
 // How an image node's displacement and rotation vector follow its master's (row-major 3 x 3,
@@ -39,7 +39,7 @@ struct MirrorMaps {
 };
 
 // The maps across a free edge (frame, mirrorPlaneEdge's: n the mirror plane's normal, t the
-// tangent, z normal to both) of a set holding heldDofs at zero; none where the held DOFs make neither
+// tangent, z normal to both) of a set holding heldDofs; none where the held DOFs make neither
 // part of the motion a mirror image. Per part, in the edge frame (model-setup.md):
 // membrane (u_n, u_t, theta_z): u_n and u_t held -> held (map 0); u_n held -> even image
 // (u_n odd, u_t even, theta_z odd); u_t held -> odd image; bending (w, theta_n, theta_t):

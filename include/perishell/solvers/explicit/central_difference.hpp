@@ -272,7 +272,7 @@ class CentralDifferenceSolver {
           rotation::rotateBySpatialIncrement(initial + 3, q);
           for (int k = 0; k < 4; ++k) rotations(node, k) = q[k];
         });
-    assembly::imposeMirrorImages(space_, actions_.mirrorImages, displacements, rotations);
+    assembly::imposeMirrorImages(space_, actions_.mirrorImages, displacements, rotations, actions_.prescribedAt(0.0, 1.0));
   }
 
   void computeForces(bool withStrainEnergy) {
@@ -356,7 +356,8 @@ class CentralDifferenceSolver {
           dampingWork(node) += dissipated;
           if (monitor) kinetic(node) = kineticNode;
         });
-    assembly::imposeMirrorImages(space_, actions_.mirrorImages, displacements, rotations);
+    assembly::imposeMirrorImages(space_, actions_.mirrorImages, displacements, rotations,
+                                 actions_.prescribedAt(time_ + dt, 1.0));
   }
 
   // Kinetic energy from the stored half-step velocities alone (between steps).
@@ -500,7 +501,8 @@ class CentralDifferenceSolver {
             rotation::rotateBySpatialIncrement(spin, q);
             for (int k = 0; k < 4; ++k) trial.rotations(node, k) = q[k];
           });
-      assembly::imposeMirrorImages(space_, actions_.mirrorImages, trial.displacements, trial.rotations);
+      assembly::imposeMirrorImages(space_, actions_.mirrorImages, trial.displacements, trial.rotations,
+                                   assembly::NothingPrescribed{});
       fillContiguous(space_, trialForces, 0.0);
       const pd::BondForceOutputs<MemorySpace> outputs{trialForces, VectorView<MemorySpace>(), scratchEnergy, scratchIntact};
       addInternalForces(trial, outputs);

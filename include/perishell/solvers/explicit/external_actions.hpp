@@ -19,6 +19,21 @@ struct CurveFactors {
   double values[maxCurvesPerKind] = {};
 };
 
+// What the supports prescribe at one time or load factor: value x the curve's factor, or x
+// constantFactor for a value without a curve (1 in time, the load factor in statics).
+template <class MemorySpaceT>
+struct PrescribedTargets {
+  pd::NodalVectorView<MemorySpaceT> value;
+  Kokkos::View<std::int8_t* [6], Kokkos::LayoutRight, MemorySpaceT> curveIndex;
+  CurveFactors factors;
+  double constantFactor = 1.0;
+
+  KOKKOS_INLINE_FUNCTION double operator()(LocalIndex node, int d) const {
+    const int curve = curveIndex(node, d);
+    return value(node, d) * (curve < 0 ? constantFactor : factors.values[curve]);
+  }
+};
+
 template <class MemorySpaceT>
 struct ExternalActions {
   // nodes x (6 per pattern): pattern p's nodal loads in columns 6p .. 6p+5 [N, N m]
@@ -43,6 +58,9 @@ struct ExternalActions {
     CurveFactors factors;
     for (std::size_t s = 0; s < supportCurves.size(); ++s) factors.values[s] = deck::evaluateCurve(supportCurves[s], time);
     return factors;
+  }
+  PrescribedTargets<MemorySpaceT> prescribedAt(double timeOrLoadFactor, double constantFactor) const {
+    return {prescribedValue, supportCurveIndex, supportFactors(timeOrLoadFactor), constantFactor};
   }
 };
 

@@ -383,6 +383,7 @@ class StaticNewtonSolver {
   int iterationsAfterRebuild_ = 0;
   double modelSize_ = 0.0;  // the bounding-box diagonal of the reference nodes [m]
   double loadFactor_ = 0.0;
+  double prescribedFactor_ = 0.0;  // where applyPrescribedValues last put the supports (mirror images follow)
   double preferredStep_ = 0.0;  // the next sub-step's size (advanceTo), 0 before the first
   // Arc-length control: the load at factor 1, the tangent direction dt, the last increment's
   // translations, and the arc length (0 before the first increment).

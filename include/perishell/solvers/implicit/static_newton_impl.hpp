@@ -642,7 +642,8 @@ void StaticNewtonSolver<ExecutionSpaceT>::applyPrescribedValues(double loadFacto
         rotation::exponential(theta, updated);
         for (int k = 0; k < 4; ++k) q(node, k) = updated[k];
       });
-  assembly::imposeMirrorImages(space_, actions_.mirrorImages, u, q);
+  prescribedFactor_ = loadFactor;
+  assembly::imposeMirrorImages(space_, actions_.mirrorImages, u, q, actions_.prescribedAt(loadFactor, loadFactor));
 }
 
 template <class ExecutionSpaceT>
@@ -659,7 +660,8 @@ void StaticNewtonSolver<ExecutionSpaceT>::applyCorrection(double eta) {
         rotation::rotateBySpatialIncrement(phi, quaternion);
         for (int k = 0; k < 4; ++k) q(node, k) = quaternion[k];
       });
-  assembly::imposeMirrorImages(space_, actions_.mirrorImages, u, q);
+  assembly::imposeMirrorImages(space_, actions_.mirrorImages, u, q,
+                               actions_.prescribedAt(prescribedFactor_, prescribedFactor_));
 }
 
 template <class ExecutionSpaceT>
