@@ -207,6 +207,11 @@ void printMeshNotes(const perishell::model::Model& model) {
       std::printf("; %s moving as mirror images beyond %s", withThousands(numMirrored).c_str(), mirrored.c_str());
     std::printf("\n");
   }
+  for (const auto& set : model.supportLayer.narrowSets)
+    std::printf("  %-10s the layer beyond set '%s' is shallower than the horizon (%g m): the model is narrower than "
+                "the horizon inside that edge, so its PD nodes miss bonds whatever the layer; refine the mesh or "
+                "lower peridynamics.horizon-factor\n",
+                "layer", set.c_str(), model.horizon());
   for (const auto& set : model.supportLayer.skippedSets)
     std::printf("  %-10s no support layer beyond set '%s': the mesh goes on beyond each of its free edges (a slit "
                 "or a fold)\n",

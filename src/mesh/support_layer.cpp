@@ -119,7 +119,7 @@ class LayerBuilder {
 
   struct Built {
     std::vector<LocalIndex> nodes, mirrored;  // the request's held and mirrored layer nodes, sorted
-    bool hasFreeEdges = false, hasRoom = false;
+    bool hasFreeEdges = false, hasRoom = false, narrow = false;
   };
   // The layer of every request at once (a corner between two sets' edges is filled too).
   std::vector<Built> build(const std::vector<SupportLayerRequest>& requests) {
@@ -175,6 +175,7 @@ class LayerBuilder {
       if (materialBeyond(mesh_, realNodes_, edge, depth_)) continue;
       edges.push_back({imaged, owner, maps});
       result[owner].hasRoom = true;
+      if (!reachesDepth(edge)) result[owner].narrow = true;
     }
     const auto isHeld = [&](int set) { return requests[set].motion == LayerMotion::Held; };
 
@@ -397,6 +398,23 @@ class LayerBuilder {
     for (const LocalIndex element : selected) visit(element);
   }
 
+  // Whether the mesh goes on for `depth` inside the edge (a node that far in, along it): if
+  // not, the model is narrower than the horizon there and so is its layer.
+  bool reachesDepth(const FreeEdge& edge) const {
+    const Point end = node(edge.b);
+    Point lower, upper;
+    for (int d = 0; d < 3; ++d) {
+      lower[d] = std::min(edge.origin[d], end[d]) - depth_;
+      upper[d] = std::max(edge.origin[d], end[d]) + depth_;
+    }
+    bool reached = false;
+    realNodes_.forEachIn(lower, upper, [&](LocalIndex n) {
+      const Local l = local(edge, node(n));
+      reached = reached || (l.along > -0.01 && l.along < 1.01 && l.inside >= depth_ - tolerance_);
+    });
+    return reached;
+  }
+
   // A corner turns by at least ~17 degrees (sine 0.3); flatter ones need no fill.
   static constexpr double minimumCornerTurn = 0.3;
 
@@ -427,6 +445,7 @@ SupportLayer addSupportLayer(HostQuadMesh& mesh, const std::vector<SupportLayerR
   auto built = builder.build(requests);
   for (std::size_t r = 0; r < requests.size(); ++r) {
     if (built[r].hasFreeEdges && !built[r].hasRoom) layer.skippedSets.push_back(requests[r].setName);
+    if (built[r].narrow) layer.narrowSets.push_back(requests[r].setName);
     if (!built[r].nodes.empty()) layer.nodesOfSet[requests[r].setName] = std::move(built[r].nodes);
     if (!built[r].mirrored.empty()) layer.mirroredNodesOfSet[requests[r].setName] = std::move(built[r].mirrored);
   }

@@ -87,6 +87,15 @@ TEST(TEST_CATEGORY, support_layer_beyond_one_edge_and_not_over_material) {
   EXPECT_TRUE(none.layer.skippedSets.empty());
 }
 
+TEST(TEST_CATEGORY, support_layer_names_sets_where_the_model_is_narrower_than_its_depth) {
+  // 1 m across the left edge, 0.6 m across the bottom one.
+  EXPECT_TRUE(LayeredPlate("left", 0.7).layer.narrowSets.empty());
+  const LayeredPlate bottom("bottom", 0.7);
+  ASSERT_EQ(bottom.layer.narrowSets.size(), 1u);
+  EXPECT_EQ(bottom.layer.narrowSets.front(), "bottom");
+  EXPECT_TRUE(LayeredPlate("bottom", 0.6).layer.narrowSets.empty());
+}
+
 TEST(TEST_CATEGORY, support_layer_never_covers_the_far_face_of_a_slit) {
   // Two 0.5 m x 0.6 m plates side by side, not connected: their edges at x = 0.5 coincide.
   const auto half = perishell::mesh::makeRectangularPlate(0.5, 0.6, 5, 6);

@@ -55,8 +55,8 @@ std::optional<MirrorMaps> mirrorMaps(const FreeEdge& edge, std::uint8_t heldDofs
 // plane is the shell itself; else the element's frame.
 FreeEdge mirrorPlaneEdge(const FreeEdge& edge, std::uint8_t heldDofs);
 
-// A layer node that moves as the image of a node of the deck's mesh: at
-// reflection (x_master - o) + o for a point o of its mirror line (row-major 3 x 3: one
+// A layer node that moves as the image of a node of the deck's mesh. It lies at
+// reflection (x_master - o) + o, o a point of its mirror line (row-major 3 x 3: one
 // reflection, or two at a corner).
 struct MirrorImage {
   LocalIndex node, master;
@@ -71,26 +71,28 @@ struct SupportLayer {
   std::map<std::string, std::vector<LocalIndex>> nodesOfSet;  // held layer nodes per request, sorted
   std::map<std::string, std::vector<LocalIndex>> mirroredNodesOfSet;  // mirrored layer nodes per request, sorted
   std::vector<MirrorImage> mirrorImages;  // every mirrored layer node once, by node
-  // The share of each node's neighbourhood that the model holds: 0 for a mirrored layer
-  // node, 1/2 on one mirror line, 1/4 where two meet; nodes not listed hold all of theirs.
+  // The share of each node's neighbourhood that the model holds (assembly/mirror_images.hpp):
+  // 0 for a mirrored layer node and a held one beyond a mirror line, 1/2 on one mirror line,
+  // 1/4 where two meet; nodes not listed hold all of theirs.
   std::map<LocalIndex, double> mirrorShare;
   // On mirror lines: the node's area in the deck's elements over its area with the layer's,
   // the share of its mass that the model holds.
   std::map<LocalIndex, double> massShare;
   std::vector<std::string> skippedSets;  // requested sets with free edges, the mesh going on beyond each
+  std::vector<std::string> narrowSets;   // sets with an edge where the model is narrower than depth
 
   bool contains(LocalIndex node) const { return node >= firstNode; }
 };
 
 // Appends the layer to mesh (its nodes and elements after the existing ones) for every
-// request: beyond each free edge of the mesh whose two nodes lie in the set (a Mirrored
-// request: where mirrorMaps gives maps), the mirror
-// image (across the edge's line, in the plane of its element) of the elements that
-// `mayMirror` marks and whose centroids lie within `depth` of the edge; at convex corners
-// between two such edges, the image across both, where it lies within `depth` of both. Images closer than `spacing` / 4 to a node
-// of the set or of the layer share that node; a node that a Held request holds is not
-// mirrored. An edge where mesh nodes lie within `depth` beyond it (a slit, a fold) gets no
-// layer. Without requests the mesh is unchanged.
+// request: beyond each free edge of the mesh whose two nodes lie in the set (for a Mirrored
+// request, where mirrorMaps gives maps), the mirror image of the elements that `mayMirror`
+// marks and whose centroids lie within `depth` of the edge, across the edge's line in the
+// plane of its element (Held) or in its mirror plane (Mirrored, mirrorPlaneEdge); at convex
+// corners between two such edges, the image across both, where it lies within `depth` of
+// both. Images closer than `spacing` / 4 to a node of the set or of the layer share that node;
+// a node that a Held request holds is not mirrored. An edge where mesh nodes lie within
+// `depth` beyond it (a slit, a fold) gets no layer. Without requests the mesh is unchanged.
 SupportLayer addSupportLayer(HostQuadMesh& mesh, const std::vector<SupportLayerRequest>& requests,
                              const std::vector<std::uint8_t>& mayMirror, double depth, double spacing);
 
