@@ -87,13 +87,18 @@ std::vector<FreeEdge> findFreeEdges(const HostQuadMesh& mesh) {
   return free;
 }
 
-bool materialBeyond(const HostQuadMesh& mesh, const NodeGrid& nodeGrid, const FreeEdge& edge, double depth) {
+std::pair<Point3, Point3> edgeBox(const HostQuadMesh& mesh, const FreeEdge& edge, double reach) {
   const Point3 end = node(mesh, edge.b);
   Point3 lower, upper;
   for (int d = 0; d < 3; ++d) {
-    lower[d] = std::min(edge.origin[d], end[d]) - depth;
-    upper[d] = std::max(edge.origin[d], end[d]) + depth;
+    lower[d] = std::min(edge.origin[d], end[d]) - reach;
+    upper[d] = std::max(edge.origin[d], end[d]) + reach;
   }
+  return {lower, upper};
+}
+
+bool materialBeyond(const HostQuadMesh& mesh, const NodeGrid& nodeGrid, const FreeEdge& edge, double depth) {
+  const auto [lower, upper] = edgeBox(mesh, edge, depth);
   bool found = false;
   nodeGrid.forEachIn(lower, upper, [&](LocalIndex n) {
     const Point3 r = node(mesh, n) - edge.origin;

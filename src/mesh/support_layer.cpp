@@ -381,13 +381,7 @@ class LayerBuilder {
   // every node within it has its image.
   template <class Visit>
   void forEachMirrored(const FreeEdge& edge, Visit&& visit) const {
-    const double reach = depth_ + largestDiameter_;
-    const Point end = node(edge.b);
-    Point lower, upper;
-    for (int d = 0; d < 3; ++d) {
-      lower[d] = std::min(edge.origin[d], end[d]) - reach;
-      upper[d] = std::max(edge.origin[d], end[d]) + reach;
-    }
+    const auto [lower, upper] = edgeBox(mesh_, edge, depth_ + largestDiameter_);
     std::vector<LocalIndex> selected;
     centroidGrid_.forEachIn(lower, upper, [&](LocalIndex element) {
       const Local l = local(edge, centroid(element));
@@ -401,12 +395,7 @@ class LayerBuilder {
   // Whether the mesh goes on for `depth` inside the edge (a node that far in, along it): if
   // not, the model is narrower than the horizon there and so is its layer.
   bool reachesDepth(const FreeEdge& edge) const {
-    const Point end = node(edge.b);
-    Point lower, upper;
-    for (int d = 0; d < 3; ++d) {
-      lower[d] = std::min(edge.origin[d], end[d]) - depth_;
-      upper[d] = std::max(edge.origin[d], end[d]) + depth_;
-    }
+    const auto [lower, upper] = edgeBox(mesh_, edge, depth_);
     bool reached = false;
     realNodes_.forEachIn(lower, upper, [&](LocalIndex n) {
       const Local l = local(edge, node(n));

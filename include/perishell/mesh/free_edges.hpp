@@ -11,6 +11,7 @@
 
 #include <array>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace perishell::mesh {
@@ -61,6 +62,10 @@ class NodeGrid {
 // at most `depth`, within `depth` of its plane, their foot on the edge): the material goes
 // on there. `nodeGrid` is a grid over the mesh nodes from makeNodeGrid.
 bool materialBeyond(const HostQuadMesh& mesh, const NodeGrid& nodeGrid, const FreeEdge& edge, double depth);
+
+// The box around the edge, `reach` beyond it on every side: where a grid query for what lies
+// near the edge looks.
+std::pair<Point3, Point3> edgeBox(const HostQuadMesh& mesh, const FreeEdge& edge, double reach);
 
 // The grid of every node of the mesh, cells of size `cell`.
 NodeGrid makeNodeGrid(const HostQuadMesh& mesh, double cell);
