@@ -1,7 +1,8 @@
 #pragma once
 // Mirrored support-layer nodes on the device (mesh/support_layer.hpp; docs/model-setup.md,
 // "Supports on PD regions"). A mirrored layer node L owns no DOF: it moves as the image of its
-// master M, u_L = A_u u_M and theta_L = A_theta theta_M (rotation vectors). The layer stands
+// master M, u_L = A_u u_M and theta_L = A_theta theta_M (rotation vectors), about what its set
+// prescribes (imposeMirrorImages). The layer stands
 // for the material beyond a symmetry plane, hinge or diaphragm, whose energy the model does
 // not store. The whole structure's energy is the sum over its nodes of half their bonds'
 // energies; the model stores each node's part times its share of the structure (1 inside,
@@ -9,7 +10,8 @@
 // of its ends (weighBondsByShare), and likewise a node on a mirror line its share of the mass.
 // For the states the images allow, that is exactly the model's part of the whole structure's
 // energy. Its gradient gives the masters the images' forces, f_M += A^T f_L
-// (condenseImageForces), and its Hessian the tangent blocks A^T K A (mapBondTangent).
+// (condenseImageForces, which leaves each image its reaction), and its Hessian the tangent
+// blocks A^T K A (mapBondTangent).
 #include <perishell/core/rotation.hpp>
 #include <perishell/mesh/support_layer.hpp>
 #include <perishell/pd/pd_body.hpp>
