@@ -187,6 +187,19 @@ TEST(TEST_CATEGORY, strip_pulled_by_a_moving_symmetry_plane) {
   EXPECT_LT(std::abs(errors[0]), 0.2 * std::abs(errors[1]));  // -3.9 % without the layer
 }
 
+// The quarter of the plate with the PD centre: the PD zone meets both symmetry planes, CCM the
+// rest. Only PD elements are mirrored, and the layer's elements stay PD next to the
+// transition (coupling/make_coupled_model.hpp): as shell elements they stalled Newton.
+TEST(TEST_CATEGORY, quarter_clamped_plate_with_a_pd_centre_mirrors_the_whole_plate) {
+  using namespace plate_verification_test;
+  const std::string zones =
+      "{default: ccm, pd-regions: {centre: {box: {min: [0.1464, 0.1464, -1.0], max: [0.8536, 0.8536, 1.0]}}}}";
+  const auto whole = solveClampedPlate(clampedPlate(40, zones), "clamped plate 50 % PD around the centre a/40");
+  const auto quarter = solveClampedPlate(quarterClampedPlate(40, zones), "its quarter, two symmetry planes mirrored");
+  EXPECT_NEAR(quarter.relativeError, whole.relativeError, 0.005);
+  EXPECT_NEAR(-quarter.reactionZ, 0.25 * pressure, 1e-8 * pressure);
+}
+
 TEST(TEST_CATEGORY, clamped_plate_ccm) {
   using namespace plate_verification_test;
   const auto result = solveClampedPlate(clampedPlate(20, "{default: ccm}"), "clamped plate CCM a/20");

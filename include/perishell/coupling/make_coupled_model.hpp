@@ -138,10 +138,14 @@ CoupledBodies<typename ExecutionSpaceT::memory_space> makeCoupledBodies(
   assembly::weighBondsByShare(space, bodies.pdBody,
                               assembly::makeMirrorImages<MemorySpaceT>(inputs.supportLayer, numNodes));
 
-  // CCM elements: all but the pure PD ones (alphaBar = 1 at every node, to round-off).
+  // CCM elements: all but the pure PD ones (alphaBar = 1 at every node, to round-off) and the
+  // support layer's, which only give its nodes their bonds (mesh/support_layer.hpp): near a
+  // PD-CCM transition a layer element's alphaBar falls below 1 too, and as a shell element
+  // beyond a mirror line it stored energy the model does not own (Newton stalled on a quarter
+  // plate whose PD zone met a symmetry plane).
   const auto hostAlphaBar = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, bodies.alphaBar);
   constexpr double purePd = 1.0 - 1e-12;
-  for (LocalIndex e = 0; e < numElements; ++e) {
+  for (LocalIndex e = 0; e < std::min(numElements, inputs.supportLayer.firstElement); ++e) {
     bool pure = true;
     for (int a = 0; a < 4; ++a) pure = pure && hostAlphaBar(hostMesh.quads(e, a)) >= purePd;
     if (!pure) bodies.ccmElements.push_back(e);
