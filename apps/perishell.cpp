@@ -27,7 +27,7 @@ namespace {
 
 constexpr const char* usage = R"(usage: perishell [--help] [--version] [--backend-info]
        perishell run DECK.yaml [--output DIR] [--backend device|host] [--max-steps N]
-                               [--phase-times]
+                               [--restart DIR] [--phase-times]
        perishell check DECK.yaml [--output DIR]
        perishell membrane [options]
 
@@ -40,13 +40,19 @@ Commands:
                   DIR/timings.csv (phase,seconds). Exit 1 with the reason on a bad deck, an
                   unstable explicit run or an increment Newton cannot converge. SIGINT
                   (Ctrl-C) or SIGTERM stops the run after its current step or increment,
-                  written, with its summary, and exit status 130 or 143; a second one stops
-                  it at once.
+                  written, with a checkpoint (DIR/checkpoint.h5) and its summary, and exit
+                  status 130 or 143; a second one stops it at once. A run also writes a
+                  checkpoint every output.checkpoint-every steps or minutes, when
+                  --max-steps stops it, and at its end when the deck asks for checkpoints.
       --backend B     device (default): the build's default device (CUDA in a CUDA build);
                       host: its host space (OpenMP), the CPU baseline of the same kernels.
                       In an OpenMP build both are the same.
       --max-steps N   stop after N steps (explicit) or increments (implicit), keeping the
                       deck's load schedule: a truncated run follows the full one
+      --restart DIR   continue the run whose output directory is DIR from its checkpoint,
+                      writing on into DIR (what that run wrote after its checkpoint is
+                      replaced): the continued run equals an uninterrupted one. The deck may
+                      extend the run (more steps, a later end time).
       --phase-times   time the explicit step's phases (forces, integration, energy monitor)
                       with a synchronisation after each; implicit phases are always timed
   check DECK      Validate a case deck (docs/deck.md), build its model — mesh, zones, PD
@@ -244,6 +250,8 @@ DeckArguments parseDeckArguments(const std::string& command, const std::vector<s
       const int steps = parseInteger("--max-steps", valueOf(i, "a number of steps"));
       if (steps < 1) throw UsageError("option --max-steps: must be at least 1");
       parsed.run.maxSteps = steps;
+    } else if (isRun && args[i] == "--restart") {
+      parsed.run.restartDirectory = valueOf(i, "the output directory of the run to continue");
     } else if (isRun && args[i] == "--phase-times") {
       parsed.run.timePhases = true;
     } else if (parsed.deckPath.empty() && args[i].rfind("--", 0) != 0) {
@@ -253,6 +261,9 @@ DeckArguments parseDeckArguments(const std::string& command, const std::vector<s
     }
   }
   if (parsed.deckPath.empty()) throw UsageError("'" + command + "' needs a deck file");
+  if (!parsed.run.restartDirectory.empty() && !parsed.run.outputDirectory.empty())
+    throw UsageError("options --restart and --output: a restart writes on into the directory it continues; leave "
+                     "out --output");
   return parsed;
 }
 
@@ -320,8 +331,12 @@ int runDeck(const std::vector<std::string>& args) {
     std::cout.flush();
     std::fprintf(stderr,
                  "perishell: stopped by %s before the deck's end; the results hold the states up to the last one "
-                 "in the summary\n",
-                 perishell::stopSignalName(stoppedBy));
+                 "in the summary; continue with: perishell run %s --restart %s\n",
+                 perishell::stopSignalName(stoppedBy), parsed.deckPath.c_str(),
+                 (parsed.run.restartDirectory.empty()
+                      ? (parsed.run.outputDirectory.empty() ? deck.output.directory : parsed.run.outputDirectory)
+                      : parsed.run.restartDirectory)
+                     .c_str());
     return 128 + stoppedBy;
   }
   return 0;

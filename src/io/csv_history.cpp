@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <utility>
 
@@ -21,10 +23,39 @@ CsvHistory::CsvHistory(std::string path, std::vector<std::string> columnNames)
                                   " name '" + name +
                                   "' must be non-empty and free of commas, quotes and line breaks");
   }
+  writeFileAtomically(path_, headerLine(columnNames_));
+  openToAppend();
+}
+
+CsvHistory::CsvHistory(std::string path, std::vector<std::string> columnNames, std::size_t keepRows)
+    : path_(std::move(path)), columnNames_(std::move(columnNames)), numRows_(keepRows) {
+  std::ifstream in(path_, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot continue the history '" + path_ + "': " + std::strerror(errno));
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string header = headerLine(columnNames_);
+  if (text.compare(0, header.size(), header) != 0)
+    throw std::runtime_error("cannot continue the history '" + path_ + "': its header is not this run's columns (" +
+                             header.substr(0, header.size() - 1) + ")");
+  std::size_t end = header.size();
+  for (std::size_t row = 0; row < keepRows; ++row) {
+    const std::size_t newline = text.find('\n', end);
+    if (newline == std::string::npos)
+      throw std::runtime_error("cannot continue the history '" + path_ + "': it has " + std::to_string(row) +
+                               " whole rows, the checkpoint was written after row " + std::to_string(keepRows));
+    end = newline + 1;
+  }
+  if (end < text.size()) writeFileAtomically(path_, text.substr(0, end));
+  openToAppend();
+}
+
+std::string CsvHistory::headerLine(const std::vector<std::string>& columnNames) {
   std::string header;
-  for (std::size_t column = 0; column < columnNames_.size(); ++column)
-    header += (column == 0 ? "" : ",") + columnNames_[column];
-  writeFileAtomically(path_, header + '\n');
+  for (std::size_t column = 0; column < columnNames.size(); ++column)
+    header += (column == 0 ? "" : ",") + columnNames[column];
+  return header + '\n';
+}
+
+void CsvHistory::openToAppend() {
   file_.reset(std::fopen(path_.c_str(), "a"));
   if (!file_) throw std::runtime_error("cannot open the history '" + path_ + "' to append: " + std::strerror(errno));
 }

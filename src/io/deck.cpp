@@ -785,8 +785,47 @@ deck::Solver readSolver(const Section& section) {
   return solver;
 }
 
+// checkpoint-every: a number of steps (increments), "<minutes> min" of wall time, or a list of both.
+void readCheckpointEvery(const Section& section, deck::Output& output) {
+  const std::string usage = "expected a number of steps (increments), a wall time such as '30 min', or a list of "
+                            "both ([5000, 30 min])";
+  std::vector<std::string> items;
+  const ParameterEntry& value = section.entry("checkpoint-every");
+  if (holds<Teuchos::Array<std::string>>(value)) {
+    const auto& array = valueOf<Teuchos::Array<std::string>>(value);
+    items.assign(array.begin(), array.end());
+  } else if (holds<std::string>(value)) {
+    items.push_back(valueOf<std::string>(value));
+  } else if (holds<Teuchos::Array<int>>(value) || holds<Teuchos::Array<double>>(value)) {
+    section.fail("checkpoint-every", usage + ", got a list of numbers");
+  } else {
+    output.checkpointEvery = section.integer("checkpoint-every");
+    if (output.checkpointEvery < 1)
+      section.fail("checkpoint-every", "must be >= 1 step, got " + std::to_string(output.checkpointEvery));
+    return;
+  }
+  if (items.empty() || items.size() > 2) section.fail("checkpoint-every", usage);
+  for (const auto& item : items) {
+    std::istringstream words(item);
+    double number = 0.0;
+    std::string unit, rest;
+    if (!(words >> number) || (words >> unit && words >> rest)) section.fail("checkpoint-every", usage + ", got '" + item + "'");
+    if (unit.empty()) {
+      if (!(number >= 1.0 && number == std::floor(number) && number < 9.0e15))
+        section.fail("checkpoint-every", "a number of steps must be a whole number >= 1, got '" + item + "'");
+      output.checkpointEvery = static_cast<long long>(number);
+    } else if (unit == "min") {
+      if (!(number > 0.0 && std::isfinite(number)))
+        section.fail("checkpoint-every", "a wall time must be > 0 minutes, got '" + item + "'");
+      output.checkpointMinutes = number;
+    } else {
+      section.fail("checkpoint-every", "unknown unit '" + unit + "' (only 'min'); " + usage);
+    }
+  }
+}
+
 deck::Output readOutput(const Section& section, const std::filesystem::path& baseDirectory) {
-  section.allowOnly({"directory", "every", "history-every", "fields", "history", "probes"});
+  section.allowOnly({"directory", "every", "history-every", "fields", "history", "probes", "checkpoint-every"});
   deck::Output output;
   output.directory = resolveAgainst(baseDirectory, section.text("directory", output.directory));
   output.every = section.integer("every", output.every);
@@ -795,6 +834,7 @@ deck::Output readOutput(const Section& section, const std::filesystem::path& bas
   output.historyEvery = section.integer("history-every", output.every > 0 ? output.every : 100);
   if (output.historyEvery < 1)
     section.fail("history-every", "must be >= 1, got " + std::to_string(output.historyEvery));
+  if (section.has("checkpoint-every")) readCheckpointEvery(section, output);
   if (section.has("fields"))
     output.fields = readDistinct<deck::OutputField>(
         section, "fields",

@@ -51,8 +51,9 @@ std::string describeHolder(const std::string& text) {
 
 // The files an earlier run of either solver leaves (docs/results.md), and the temporaries of
 // atomic writes whose process no longer runs.
-void removeEarlierResults(const std::string& directory, std::ostream& log) {
-  static const std::regex resultFile(R"((results(_mesh|_[0-9]{6,})?\.(xmf|h5))|history\.csv|timings\.csv)");
+void removeEarlierResults(const std::string& directory, std::ostream& log, bool keepResults) {
+  static const std::regex resultFile(
+      R"((results(_mesh|_[0-9]{6,})?\.(xmf|h5))|history\.csv|timings\.csv|checkpoint\.h5)");
   static const std::regex temporaryFile(R"(.+\.tmp\.([0-9]+))");
   std::vector<std::string> removed;
   for (const auto& entry : fs::directory_iterator(directory)) {
@@ -60,7 +61,7 @@ void removeEarlierResults(const std::string& directory, std::ostream& log) {
     const std::string name = entry.path().filename().string();
     std::smatch match;
     // A pid of more than 9 digits is no process of this system.
-    const bool stale = std::regex_match(name, resultFile) ||
+    const bool stale = (!keepResults && std::regex_match(name, resultFile)) ||
                        (std::regex_match(name, match, temporaryFile) &&
                         (match[1].length() > 9 || !processRuns(std::stol(match[1].str()))));
     if (!stale) continue;
@@ -76,7 +77,7 @@ void removeEarlierResults(const std::string& directory, std::ostream& log) {
 
 }  // namespace
 
-OutputDirectoryLock::OutputDirectoryLock(const std::string& directory, std::ostream& log)
+OutputDirectoryLock::OutputDirectoryLock(const std::string& directory, std::ostream& log, EarlierResults earlier)
     : lockPath_((fs::path(directory) / outputLockFileName).string()) {
   std::error_code error;
   fs::create_directories(directory, error);
@@ -113,7 +114,7 @@ OutputDirectoryLock::OutputDirectoryLock(const std::string& directory, std::ostr
     descriptor_ = descriptor;
     break;
   }
-  removeEarlierResults(directory, log);
+  removeEarlierResults(directory, log, earlier == EarlierResults::Keep);
 }
 
 OutputDirectoryLock::~OutputDirectoryLock() {

@@ -38,7 +38,7 @@ bool ProgressReporter::update(long long step, const std::string& state) {
   const double elapsed = now - start_;
   // The remaining steps at the mean rate so far: steady for explicit runs, a rough guide
   // for Newton increments of varying cost.
-  const double remaining = elapsed * double(totalSteps_ - step) / double(step);
+  const double remaining = elapsed * double(totalSteps_ - step) / double(std::max(step - firstStep_, 1LL));
   char line[512];
   std::snprintf(line, sizeof line, "step %lld/%lld (%5.1f %%)  %s  elapsed %s  ETA %s\n", step, totalSteps_,
                 100.0 * double(step) / double(totalSteps_), state.c_str(), formatDuration(elapsed).c_str(),

@@ -2,13 +2,14 @@
 #include <perishell/io/atomic_file.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 
-#include <hdf5.h>
+#include "hdf5_file.hpp"
 
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <regex>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -18,95 +19,12 @@
 
 namespace perishell::io {
 
+using namespace hdf5;
+
 namespace {
 
 // The .xmf declares the topology as 4-byte Int.
 static_assert(std::is_same_v<LocalIndex, int> && sizeof(int) == 4, "topology is written as int32");
-
-// HDF5 prints its error stack to stderr by default; while perishell calls it, the stack is
-// read into the exception message instead.
-class QuietHdf5Errors {
- public:
-  QuietHdf5Errors() {
-    H5Eget_auto2(H5E_DEFAULT, &savedHandler_, &savedData_);
-    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  }
-  ~QuietHdf5Errors() { H5Eset_auto2(H5E_DEFAULT, savedHandler_, savedData_); }
-  QuietHdf5Errors(const QuietHdf5Errors&) = delete;
-  QuietHdf5Errors& operator=(const QuietHdf5Errors&) = delete;
-
- private:
-  H5E_auto2_t savedHandler_ = nullptr;
-  void* savedData_ = nullptr;
-};
-
-// The innermost entry of HDF5's error stack: the most specific reason (for a file that
-// cannot be created it carries the errno text, e.g. "No such file or directory").
-std::string innermostHdf5Error() {
-  std::string description = "no HDF5 error detail";
-  const auto takeFirst = [](unsigned entry, const H5E_error2_t* error, void* result) -> herr_t {
-    if (entry == 0 && error->desc) *static_cast<std::string*>(result) = error->desc;
-    return 0;
-  };
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, takeFirst, &description);
-  return description;
-}
-
-template <class StatusT>
-StatusT checkHdf5(StatusT status, const std::string& what, const std::string& path) {
-  if (status < 0)
-    throw std::runtime_error("HDF5 file '" + path + "': cannot " + what + ": " + innermostHdf5Error());
-  return status;
-}
-
-// An HDF5 identifier closed on scope exit; closeChecked() for the file, whose close flushes
-// the data and so can fail.
-class Hdf5Handle {
- public:
-  Hdf5Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
-  ~Hdf5Handle() {
-    if (id_ >= 0) close_(id_);
-  }
-  Hdf5Handle(const Hdf5Handle&) = delete;
-  Hdf5Handle& operator=(const Hdf5Handle&) = delete;
-
-  hid_t get() const { return id_; }
-  void closeChecked(const std::string& path) {
-    const hid_t id = std::exchange(id_, -1);
-    checkHdf5(close_(id), "close the file", path);
-  }
-
- private:
-  hid_t id_;
-  herr_t (*close_)(hid_t);
-};
-
-// Creates the HDF5 file `path` atomically; fill(file, temporaryPath) adds the datasets.
-void writeHdf5FileAtomically(const std::string& path,
-                             const std::function<void(hid_t, const std::string&)>& fill) {
-  replaceFileAtomically(path, [&fill](const std::string& temporary) {
-    const QuietHdf5Errors quiet;
-    Hdf5Handle file(checkHdf5(H5Fcreate(temporary.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT),
-                              "create the file", temporary),
-                    H5Fclose);
-    fill(file.get(), temporary);
-    file.closeChecked(temporary);
-  });
-}
-
-void writeDataset(hid_t location, const std::string& name, hid_t memoryType, hid_t fileType,
-                  const std::vector<hsize_t>& dimensions, const void* data, const std::string& path) {
-  Hdf5Handle space(
-      checkHdf5(H5Screate_simple(static_cast<int>(dimensions.size()), dimensions.data(), nullptr),
-                "create the dataspace of '" + name + "'", path),
-      H5Sclose);
-  Hdf5Handle dataset(checkHdf5(H5Dcreate2(location, name.c_str(), fileType, space.get(), H5P_DEFAULT,
-                                          H5P_DEFAULT, H5P_DEFAULT),
-                               "create dataset '" + name + "'", path),
-                     H5Dclose);
-  checkHdf5(H5Dwrite(dataset.get(), memoryType, H5S_ALL, H5S_ALL, H5P_DEFAULT, data),
-            "write dataset '" + name + "'", path);
-}
 
 // HDF5 writes from one contiguous buffer; a padded host view is copied once.
 template <class ViewT>
@@ -298,6 +216,28 @@ void XdmfTimeSeriesWriter::writeStep(double time, const std::vector<NodalField>&
     xdmfBytes_ = text.size();
   }
   steps_.push_back(std::move(record));
+}
+
+void XdmfTimeSeriesWriter::continueSeries(std::vector<StepRecord> earlier) {
+  if (!steps_.empty()) throw std::logic_error("XDMF output '" + xdmfPath() + "': continueSeries after writeStep");
+  for (std::size_t step = 0; step < earlier.size(); ++step)
+    if (!std::filesystem::is_regular_file(stepPath(static_cast<int>(step))))
+      throw std::runtime_error("XDMF output '" + xdmfPath() + "': step " + std::to_string(step) + " of the run to " +
+                               "continue is missing (" + stepPath(static_cast<int>(step)) + ")");
+  // The steps an interrupted run wrote after its checkpoint are not this run's.
+  const std::regex stepFile(baseName_ + R"(_([0-9]{6,})\.h5)");
+  for (const auto& entry : std::filesystem::directory_iterator(directory_)) {
+    std::smatch match;
+    const std::string name = entry.path().filename().string();
+    if (std::regex_match(name, match, stepFile) && std::stoull(match[1].str()) >= earlier.size())
+      std::filesystem::remove(entry.path());
+  }
+  steps_ = std::move(earlier);
+  std::string text = xdmfHeader();
+  for (std::size_t step = 0; step < steps_.size(); ++step) text += xdmfGrid(static_cast<int>(step), steps_[step]);
+  text += xdmfClosing();
+  writeFileAtomically(xdmfPath(), text);
+  xdmfBytes_ = text.size();
 }
 
 std::string XdmfTimeSeriesWriter::xdmfHeader() const {

@@ -1,6 +1,5 @@
 #include <perishell/core/stop_request.hpp>
 #include <perishell/io/csv_history.hpp>
-#include <perishell/io/output_directory.hpp>
 #include <perishell/io/progress.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/nodal_loads.hpp>
@@ -9,6 +8,7 @@
 #include <perishell/solvers/explicit/explicit_run.hpp>
 #include <perishell/solvers/history_columns.hpp>
 #include <perishell/solvers/model_actions.hpp>
+#include <perishell/solvers/run_checkpoint.hpp>
 #include <perishell/solvers/state_check.hpp>
 
 #include <algorithm>
@@ -55,8 +55,9 @@ template <class ExecutionSpaceT>
 class RunOutput {
  public:
   using Solver = CentralDifferenceSolver<ExecutionSpaceT>;
+  // restart: continue the outputs of the run that wrote it (solvers/run_checkpoint.hpp).
   RunOutput(const model::Model& model, const std::string& directory, const Solver& solver,
-            const HistoryColumns& shared)
+            const HistoryColumns& shared, const io::Checkpoint* restart)
       : model_(model),
         solver_(solver),
         shared_(shared),
@@ -93,7 +94,18 @@ class RunOutput {
       }
     }
     add(shared.probeColumns());
-    history_.emplace(directory + "/history.csv", columns);
+    if (restart) {
+      auto position = takeOutputPosition(*restart);
+      writer_.continueSeries(std::move(position.fieldSteps));
+      history_.emplace(directory + "/history.csv", columns, position.historyRows);
+      const auto& tip = restart->reals("output.crack-tip");
+      if (tip.size() != 7) throw io::CheckpointError(restart->context() + "'output.crack-tip' is not of this version");
+      lastTipTime_ = tip[0];
+      lastTipDistance_ = tip[1];
+      if (tip[2] != 0.0) crackTip_ = CrackTip{{tip[3], tip[4], tip[5]}, tip[6]};
+    } else {
+      history_.emplace(directory + "/history.csv", columns);
+    }
     if (!deck.mesh.preCracks.empty()) {
       const auto& start = deck.mesh.preCracks.front().segment.start;
       crackOrigin_ = {start[0], start[1], start[2]};
@@ -101,6 +113,13 @@ class RunOutput {
   }
 
   std::string xdmfPath() const { return writer_.xdmfPath(); }
+  // How far the outputs have got, and the crack tip's last row, for a checkpoint.
+  void saveTo(io::Checkpoint& checkpoint) const {
+    putOutputPosition(checkpoint, {history_->numRows(), writer_.steps()});
+    const CrackTip tip = crackTip_.value_or(CrackTip{});
+    checkpoint.putReals("output.crack-tip", {lastTipTime_, lastTipDistance_, crackTip_ ? 1.0 : 0.0, tip.position[0],
+                                             tip.position[1], tip.position[2], tip.length});
+  }
   // The nodes of PD elements, for the zone field (the adaptive zone grows them).
   void setZoneNodes(const Kokkos::View<LocalIndex*, Kokkos::HostSpace>& nodes) { zoneNodes_ = nodes; }
   std::string historyPath() const { return history_->path(); }
@@ -235,6 +254,14 @@ class RunOutput {
   std::optional<CrackTip> crackTip_;
 };
 
+// The adaptive zone a checkpoint recorded: the elements that had turned PD.
+Kokkos::View<std::uint8_t*, Kokkos::HostSpace> checkpointZone(const io::Checkpoint& checkpoint,
+                                                              const model::Model& model) {
+  Kokkos::View<std::uint8_t*, Kokkos::HostSpace> zone("checkpoint zone", model.elementIsPd.extent(0));
+  takeView(checkpoint, "adaptive.element-is-pd", zone, "the deck's mesh is not the one of the checkpoint's run");
+  return zone;
+}
+
 // Stops the run on a non-finite, runaway or blown-up state (docs/reliability.md), naming the
 // step, the quantity and the deck's likely cause; the files hold the steps before.
 template <class Solver>
@@ -263,9 +290,10 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   requireRunnableModel(model);
   using Clock = std::chrono::steady_clock;
   const auto& deck = model.deck;
-  const std::string directory = runOptions.outputDirectory.empty() ? deck.output.directory : runOptions.outputDirectory;
   // Before the set-up: a directory another run holds is refused at once.
-  const io::OutputDirectoryLock outputLock(directory, log);
+  const RunDirectory runDirectory(model, runOptions, "explicit", log);
+  const std::string& directory = runDirectory.path();
+  const auto& checkpoint = runDirectory.checkpoint();
   const auto& settings = deck.solver.explicitSettings;
   const auto setupStart = Clock::now();
   // Before the solver's set-up, so that a probe off the shell stops the run at once.
@@ -275,8 +303,8 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   // with zones.adaptive the zone object owns them and grows the PD zone during the run.
   std::optional<coupling::AdaptivePdZone<ExecutionSpaceT>> adaptive;
   if (deck.zones.adaptive)
-    adaptive.emplace(space, model.shell.mesh, model.elementIsPd, coupling::couplingInputs(model),
-                     deck.zones.adaptive->strainFraction);
+    adaptive.emplace(space, model.shell.mesh, checkpoint ? checkpointZone(*checkpoint, model) : model.elementIsPd,
+                     coupling::couplingInputs(model), deck.zones.adaptive->strainFraction);
   const auto bodies = adaptive ? adaptive->bodies() : coupling::makeCoupledBodies(space, model);
   const auto& body = bodies.pdBody;
   // The support layer's elements are PD from the start; the counts are the deck's mesh's.
@@ -293,6 +321,7 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   CentralDifferenceSolver<ExecutionSpaceT> solver(space, body, bodies.shellElements(),
                                                   makeExternalActions<typename ExecutionSpaceT::memory_space>(model),
                                                   options);
+  if (checkpoint) solver.restoreFrom(*checkpoint);
   const long long deckSteps =
       settings.steps ? *settings.steps
                      : std::max(1LL, static_cast<long long>(std::ceil(*settings.endTime / solver.timeStep() - 1e-9)));
@@ -306,6 +335,13 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
       << " s; setup " << formatSeconds(setupSeconds) << "\n";
   if (totalSteps < deckSteps)
     log << "explicit: stopping after " << totalSteps << " of the deck's " << deckSteps << " steps (--max-steps)\n";
+  if (checkpoint)
+    log << "restart: continuing from step " << solver.stepIndex() << " (t = " << solver.time() << " s) of "
+        << checkpoint->source() << "; dt " << solver.timeStep() << " s as that run had it\n";
+  if (checkpoint && solver.stepIndex() >= totalSteps)
+    throw std::invalid_argument("restart: the checkpoint is at step " + std::to_string(solver.stepIndex()) +
+                                ", and this run ends at step " + std::to_string(totalSteps) +
+                                ": nothing is left to run (raise solver.steps or solver.end-time, or --max-steps)");
   if (adaptive)
     log << "adaptive PD zone: a CCM element turns PD when its surface strain reaches "
         << deck.zones.adaptive->strainFraction << " x s_c = " << adaptive->threshold() << " (checked every "
@@ -317,14 +353,31 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   // The run's wall time starts with the first output, so total = setup + run.
   const auto runStart = Clock::now();
   auto outputStart = runStart;
-  RunOutput<ExecutionSpaceT> output(model, directory, solver, historyColumns);
-  output.writeFields();
-  output.appendHistory(solver, solver.checkState().energy);
+  RunOutput<ExecutionSpaceT> output(model, directory, solver, historyColumns, checkpoint ? &*checkpoint : nullptr);
+  if (!checkpoint) {
+    output.writeFields();
+    output.appendHistory(solver, solver.checkState().energy);
+  } else if (adaptive) {
+    output.setZoneNodes(adaptive->pdElementNodes());
+  }
   double outputSeconds = fencedSecondsSince(space, outputStart), adaptiveSeconds = 0.0;
   io::ProgressReporter progress(totalSteps, log);
+  progress.continueFrom(solver.stepIndex());
   const long long fieldEvery = deck.output.every, historyEvery = deck.output.historyEvery;
-  long long switches = 0;
+  long long switches = checkpoint ? checkpoint->integer("explicit-run.zone-switches") : 0;
   int stoppedBy = 0;
+  CheckpointSchedule checkpointSchedule(deck.output);
+  int checkpointsWritten = 0;
+  const auto writeCheckpoint = [&] {
+    io::Checkpoint state;
+    solver.saveTo(state);
+    output.saveTo(state);
+    if (adaptive) putView(state, "adaptive.element-is-pd", adaptive->elementIsPd());
+    state.putInteger("explicit-run.zone-switches", switches);
+    writeRunCheckpoint(state, model, "explicit", directory);
+    checkpointSchedule.written();
+    ++checkpointsWritten;
+  };
   while (solver.stepIndex() < totalSteps) {
     try {
       solver.step();
@@ -351,14 +404,22 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
     // A stop request (SIGINT, SIGTERM) ends the run here, with this step written as the last.
     stoppedBy = stopRequestSignal();
     const bool last = step == totalSteps || stoppedBy != 0;
-    const bool historyDue = last || step % historyEvery == 0;
-    const bool fieldsDue = last || (fieldEvery > 0 && step % fieldEvery == 0);
+    const bool historyOnSchedule = step % historyEvery == 0;
+    const bool fieldsOnSchedule = fieldEvery > 0 && step % fieldEvery == 0;
+    // A checkpoint on its schedule, where the run stops before the deck's end (to be
+    // continued), and at the deck's end when the deck asks for checkpoints (to be extended).
+    const bool checkpointDue =
+        checkpointSchedule.due(step) || (last && (step < deckSteps || deck.output.checkpoints()));
     outputStart = Clock::now();
-    if (historyDue || fieldsDue) {
+    if (last || historyOnSchedule || fieldsOnSchedule || checkpointDue) {
       const auto check = solver.checkState();
       requireHealthyState(model, solver, check, step, solver.time());
-      if (historyDue) output.appendHistory(solver, check.energy);
-      if (fieldsDue) output.writeFields();
+      if (historyOnSchedule) output.appendHistory(solver, check.energy);
+      if (fieldsOnSchedule) output.writeFields();
+      // Before the last step's extra outputs: a continued run cuts them off and writes its own.
+      if (checkpointDue) writeCheckpoint();
+      if (last && !historyOnSchedule) output.appendHistory(solver, check.energy);
+      if (last && !fieldsOnSchedule) output.writeFields();
     }
     outputSeconds += std::chrono::duration<double>(Clock::now() - outputStart).count();
     progress.update(step, solver.time());
@@ -422,6 +483,10 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   table.add("fields", summary.xdmfPath)
       .add("history", summary.historyPath)
       .add("timings", summary.timingsPath);
+  if (checkpointsWritten > 0)
+    table.add("checkpoint", checkpointPath(directory) + " (step " + std::to_string(summary.steps) +
+                                (stoppedBy != 0 || summary.steps < deckSteps ? "; continue with --restart " + directory
+                                                                             : std::string()) + ")");
   if (adaptive)
     table.add("adaptive PD zone", std::to_string(model.numPdElements) + " -> " +
                                       std::to_string(adaptive->numPdElements() - layerElements) + " PD elements in " +

@@ -1,12 +1,12 @@
 #include <perishell/core/fenced_seconds.hpp>
 #include <perishell/core/stop_request.hpp>
 #include <perishell/io/csv_history.hpp>
-#include <perishell/io/output_directory.hpp>
 #include <perishell/io/progress.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/solvers/history_columns.hpp>
 #include <perishell/solvers/implicit/implicit_run.hpp>
 #include <perishell/solvers/implicit/static_solver_from_model.hpp>
+#include <perishell/solvers/run_checkpoint.hpp>
 #include <perishell/solvers/state_check.hpp>
 
 #include <algorithm>
@@ -43,8 +43,9 @@ template <class ExecutionSpaceT>
 class ImplicitOutput {
  public:
   using Solver = StaticNewtonSolver<ExecutionSpaceT>;
+  // restart: continue the outputs of the run that wrote it (solvers/run_checkpoint.hpp).
   ImplicitOutput(const model::Model& model, const std::string& directory, const Solver& solver,
-                 const HistoryColumns& shared)
+                 const HistoryColumns& shared, const io::Checkpoint* restart)
       : model_(model), solver_(solver), shared_(shared),
         writer_((std::filesystem::create_directories(directory), directory), "results", model.outputMesh()) {
     std::vector<std::string> columns = {"increment", "load-factor", "newton-iterations", "linear-iterations", "cuts",
@@ -57,10 +58,17 @@ class ImplicitOutput {
       if (quantity == deck::HistoryQuantity::LoadPoints) add(shared.loadPointColumns());
     }
     add(shared.probeColumns());
-    history_.emplace(directory + "/history.csv", columns);
+    if (restart) {
+      auto position = takeOutputPosition(*restart);
+      writer_.continueSeries(std::move(position.fieldSteps));
+      history_.emplace(directory + "/history.csv", columns, position.historyRows);
+    } else {
+      history_.emplace(directory + "/history.csv", columns);
+    }
   }
 
   std::string xdmfPath() const { return writer_.xdmfPath(); }
+  OutputPosition position() const { return {history_->numRows(), writer_.steps()}; }
   std::string historyPath() const { return history_->path(); }
 
   void writeFields() {
@@ -162,9 +170,10 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
                                  std::ostream& log) {
   using Clock = std::chrono::steady_clock;
   const auto& deck = model.deck;
-  const std::string directory = runOptions.outputDirectory.empty() ? deck.output.directory : runOptions.outputDirectory;
   // Before the set-up: a directory another run holds is refused at once.
-  const io::OutputDirectoryLock outputLock(directory, log);
+  const RunDirectory runDirectory(model, runOptions, "implicit", log);
+  const std::string& directory = runDirectory.path();
+  const auto& checkpoint = runDirectory.checkpoint();
   const auto& settings = deck.solver.implicitSettings;
   const bool arcLength = settings.control == deck::ImplicitSettings::Control::ArcLength;
   // Under arc-length control the run ends at load factor 1; maxIncrements bounds it.
@@ -182,6 +191,17 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
                                   "value by the one load factor it solves for, but " + obstacle +
                                   "; use control: load, or remove the curve / prescribed value");
   }
+  // The run's counters so far (a restart adds to them): increments, then the summary's totals.
+  std::vector<long long> counters(11, 0);
+  double maxDisplacement = 0.0;
+  if (checkpoint) {
+    solver.restoreFrom(*checkpoint);
+    counters = checkpoint->integers("implicit-run.counters");
+    if (counters.size() != 11)
+      throw io::CheckpointError(checkpoint->context() + "'implicit-run.counters' is not of this version");
+    maxDisplacement = checkpoint->real("implicit-run.max-displacement");
+  }
+  const int firstIncrement = static_cast<int>(counters[0]) + 1;
   const double setupSeconds = fencedSecondsSince(space, setupStart);
   log << "implicit: " << solver.numElements() << " shell elements, " << solver.numBonds() << " bonds on "
       << ExecutionSpaceT::name() << "; " << model.freeDofCount() << " free DOF, " << solver.numMatrixEntries()
@@ -191,22 +211,55 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   if (increments < deckIncrements)
     log << "implicit: stopping after " << increments << " of the deck's " << deckIncrements
         << " increments (--max-steps)\n";
+  if (checkpoint)
+    log << "restart: continuing after increment " << firstIncrement - 1 << " (load factor "
+        << formatNumber(solver.loadFactor(), 6) << ") of " << checkpoint->source() << "\n";
+  if (checkpoint && (firstIncrement > increments || (arcLength && solver.loadFactor() >= 1.0)))
+    throw std::invalid_argument("restart: the checkpoint is at increment " + std::to_string(firstIncrement - 1) +
+                                " (load factor " + formatNumber(solver.loadFactor(), 6) + "), and this run ends at "
+                                "increment " + std::to_string(increments) + (arcLength ? " or load factor 1" : "") +
+                                ": nothing is left to run (raise solver.increments, or --max-steps)");
 
   // The run's wall time starts with the first output, so total = setup + run.
   const auto runStart = Clock::now();
   auto outputStart = runStart;
-  ImplicitOutput<ExecutionSpaceT> output(model, directory, solver, historyColumns);
-  output.writeFields();
+  ImplicitOutput<ExecutionSpaceT> output(model, directory, solver, historyColumns, checkpoint ? &*checkpoint : nullptr);
+  if (!checkpoint) output.writeFields();
   double outputSeconds = fencedSecondsSince(space, outputStart);
   // Every increment prints: static increments are few and each one's iterations matter.
   io::ProgressReporter progress(increments, log, 0.0);
+  progress.continueFrom(firstIncrement - 1);
   const char* initialPreconditioner = preconditionerName(solver.activePreconditioner());
   log << "implicit: linear solver: " << initialPreconditioner << " preconditioned "
       << (solver.tangentForm() == TangentForm::Exact ? "GMRES (exact tangent)" : "CG") << "\n";
-  bool limitPointReported = false, snapReported = false, roundOffReported = false;
+  bool limitPointReported = counters[8] != 0, snapReported = counters[9] != 0, roundOffReported = counters[10] != 0;
   ImplicitRunSummary summary;
+  summary.newtonIterations = counters[1];
+  summary.linearIterations = counters[2];
+  summary.cuts = static_cast<int>(counters[3]);
+  summary.factorizations = counters[4];
+  summary.lineSearches = counters[5];
+  summary.preconditionerBuilds = counters[6];
+  summary.negativePivots = static_cast<long>(counters[7]);
+  summary.maxDisplacement = maxDisplacement;
   PhaseSeconds phases;
-  int taken = 0;
+  int taken = firstIncrement - 1;
+  bool reachedDeckEnd = false;
+  CheckpointSchedule checkpointSchedule(deck.output);
+  int checkpointsWritten = 0;
+  const auto writeCheckpoint = [&](int increment) {
+    io::Checkpoint state;
+    solver.saveTo(state);
+    putOutputPosition(state, output.position());
+    state.putIntegers("implicit-run.counters",
+                      {increment, summary.newtonIterations, summary.linearIterations, summary.cuts,
+                       summary.factorizations, summary.lineSearches, summary.preconditionerBuilds,
+                       summary.negativePivots, limitPointReported, snapReported, roundOffReported});
+    state.putReal("implicit-run.max-displacement", summary.maxDisplacement);
+    writeRunCheckpoint(state, model, "implicit", directory);
+    checkpointSchedule.written();
+    ++checkpointsWritten;
+  };
   // A long increment shows where Newton is at least every progressEverySeconds.
   int currentIncrement = 0;
   auto lastLine = Clock::now();
@@ -217,7 +270,7 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
         << "  Newton " << sofar.newtonIterations << "  cuts " << sofar.cuts << "  relative residual "
         << formatNumber(sofar.relativeResidual, 3) << std::endl;
   });
-  for (int increment = 1; increment <= increments; ++increment) {
+  for (int increment = firstIncrement; increment <= increments; ++increment) {
     currentIncrement = increment;
     lastLine = Clock::now();
     IncrementReport report;
@@ -270,14 +323,24 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
     taken = increment;
     // A stop request (SIGINT, SIGTERM) ends the run after this converged increment, written.
     summary.stoppedBySignal = stopRequestSignal();
-    const bool last = increment == increments || (arcLength && solver.loadFactor() >= 1.0) ||
-                      summary.stoppedBySignal != 0;
-    const bool historyDue = last || increment % deck.output.historyEvery == 0;
-    const bool fieldsDue = last || (deck.output.every > 0 && increment % deck.output.every == 0);
+    const bool deckEnd = increment == deckIncrements || (arcLength && solver.loadFactor() >= 1.0);
+    reachedDeckEnd = deckEnd;
+    const bool last = increment == increments || deckEnd || summary.stoppedBySignal != 0;
+    const bool historyOnSchedule = increment % deck.output.historyEvery == 0;
+    const bool fieldsOnSchedule = deck.output.every > 0 && increment % deck.output.every == 0;
+    // A checkpoint on its schedule, where the run stops before the deck's end (to be
+    // continued), and at the deck's end when the deck asks for checkpoints (to be extended).
+    const bool checkpointDue =
+        checkpointSchedule.due(increment) || (last && (!deckEnd || deck.output.checkpoints()));
     outputStart = Clock::now();
-    if (historyDue || fieldsDue) requireHealthyState(model, solver, increment, deckIncrements);
-    if (historyDue) summary.maxDisplacement = output.appendHistory(increment, report);
-    if (fieldsDue) output.writeFields();
+    if (last || historyOnSchedule || fieldsOnSchedule || checkpointDue)
+      requireHealthyState(model, solver, increment, deckIncrements);
+    if (historyOnSchedule) summary.maxDisplacement = output.appendHistory(increment, report);
+    if (fieldsOnSchedule) output.writeFields();
+    // Before the last increment's extra outputs: a continued run cuts them off and writes its own.
+    if (checkpointDue) writeCheckpoint(increment);
+    if (last && !historyOnSchedule) summary.maxDisplacement = output.appendHistory(increment, report);
+    if (last && !fieldsOnSchedule) output.writeFields();
     outputSeconds += std::chrono::duration<double>(Clock::now() - outputStart).count();
     progress.update(last ? increments : increment, incrementState(report));
     if (last) break;
@@ -336,6 +399,11 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
       .add("fields", summary.xdmfPath)
       .add("history", summary.historyPath)
       .add("timings", summary.timingsPath)
+      .add("checkpoint", checkpointsWritten == 0 ? std::string("-")
+                                                 : checkpointPath(directory) + " (increment " + std::to_string(taken) +
+                                                       (!reachedDeckEnd
+                                                            ? "; continue with --restart " + directory
+                                                            : std::string()) + ")")
       .print(log);
   if (stoppedShort)
     throw NewtonFailure("arc-length control reached load factor " + formatNumber(solver.loadFactor(), 6) +

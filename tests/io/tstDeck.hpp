@@ -630,6 +630,16 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
        "output.fields", {"velocity exists only for the explicit solver"}},
       {"history every zero", {{"    every: 1\n", "    every: 1\n    history-every: 0\n"}}, "output.history-every",
        {"must be >= 1, got 0"}},
+      {"checkpoint every zero steps", {{"    every: 1\n", "    every: 1\n    checkpoint-every: 0\n"}},
+       "output.checkpoint-every", {"must be >= 1 step, got 0"}},
+      {"checkpoint every hour", {{"    every: 1\n", "    every: 1\n    checkpoint-every: 2 h\n"}},
+       "output.checkpoint-every", {"unknown unit 'h' (only 'min')"}},
+      {"checkpoint every zero minutes", {{"    every: 1\n", "    every: 1\n    checkpoint-every: 0 min\n"}},
+       "output.checkpoint-every", {"a wall time must be > 0 minutes, got '0 min'"}},
+      {"checkpoint every fraction of a step", {{"    every: 1\n", "    every: 1\n    checkpoint-every: [2.5, 3 min]\n"}},
+       "output.checkpoint-every", {"a number of steps must be a whole number >= 1, got '2.5'"}},
+      {"checkpoint every three things", {{"    every: 1\n", "    every: 1\n    checkpoint-every: [1, 2, 3]\n"}},
+       "output.checkpoint-every", {"a wall time such as '30 min', or a list of both", "got a list of numbers"}},
       {"probe given as a number", {{"    every: 1\n", "    every: 1\n    probes: {tip: 3}\n"}}, "output.probes.tip",
        {"expected a list of numbers like [1, 2.5], got the number 3"}},
       {"probe with two coordinates", {{"    every: 1\n", "    every: 1\n    probes: {tip: [0.09, 0.03]}\n"}},
@@ -645,6 +655,25 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
        "output.probes.push", {"would repeat the load-points columns of loads.push; rename the probe"}},
   };
   expectDeckErrors(cases);
+}
+
+TEST(TEST_CATEGORY, deck_checkpoint_every_takes_steps_minutes_or_both) {
+  const auto outputOf = [](const std::string& value) {
+    return parseDeck(edited(baseDeck, {{"    every: 1\n", "    every: 1\n    checkpoint-every: " + value + "\n"}}),
+                     "checkpoints.yaml")
+        .output;
+  };
+  EXPECT_FALSE(parseDeck(baseDeck, "base.yaml").output.checkpoints());
+  const auto steps = outputOf("5000");
+  EXPECT_EQ(steps.checkpointEvery, 5000);
+  EXPECT_EQ(steps.checkpointMinutes, 0.0);
+  EXPECT_TRUE(steps.checkpoints());
+  const auto minutes = outputOf("2.5 min");
+  EXPECT_EQ(minutes.checkpointEvery, 0);
+  EXPECT_EQ(minutes.checkpointMinutes, 2.5);
+  const auto both = outputOf("[30 min, 200]");
+  EXPECT_EQ(both.checkpointEvery, 200);
+  EXPECT_EQ(both.checkpointMinutes, 30.0);
 }
 
 TEST(TEST_CATEGORY, deck_probes_snap_to_the_nearest_node_or_name_the_distance) {

@@ -4,6 +4,7 @@
 // every double exactly through strtod. The I/O is host side; TEST_EXECSPACE only picks the
 // binary the test runs in.
 #include <perishell/io/atomic_file.hpp>
+#include <perishell/io/checkpoint.hpp>
 #include <perishell/io/csv_history.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/mesh/quad_mesh.hpp>
@@ -621,6 +622,125 @@ TEST(TEST_CATEGORY, output_csv_history_rejects_bad_rows_and_names) {
   });
   EXPECT_NE(badName.find("column 1 name 'x,y'"), std::string::npos) << badName;
   EXPECT_EQ(filesIn(directory.path()), std::vector<std::string>{"history.csv"});
+}
+
+TEST(TEST_CATEGORY, output_checkpoint_round_trips_every_value_bit_for_bit) {
+  const TemporaryDirectory directory;
+  const std::string path = directory / "checkpoint.h5";
+  const std::vector<double> reals = {0.0, -0.0, DBL_MAX, DBL_MIN, 4.9406564584124654e-324, 1.0 / 3.0, NAN, -INFINITY};
+  perishell::io::Checkpoint saved;
+  saved.putReals("solver.state", reals);
+  saved.putReals("empty", {});
+  saved.putInteger("solver.step", 1234567890123LL);
+  saved.putIntegers("flags", {-1, 0, 5});
+  saved.putBytes("intact-bonds", {0, 1, 255, 1});
+  saved.putText("layout", "displacement:3 damage:1\n");
+  // A device view in and out, through the host.
+  Kokkos::View<double* [3], Kokkos::LayoutRight, TEST_MEMSPACE> positions("positions", 5);
+  Kokkos::parallel_for(
+      "fill positions", Kokkos::RangePolicy<TEST_EXECSPACE>(0, 5), KOKKOS_LAMBDA(const int node) {
+        for (int d = 0; d < 3; ++d) positions(node, d) = node / 7.0 + d;
+      });
+  perishell::io::putView(saved, "positions", positions);
+  saved.write(path);
+  EXPECT_EQ(countTemporaries(directory.path()), 0);
+
+  const auto read = perishell::io::Checkpoint::read(path);
+  EXPECT_EQ(read.source(), path);
+  const auto& back = read.reals("solver.state");
+  ASSERT_EQ(back.size(), reals.size());
+  for (std::size_t k = 0; k < reals.size(); ++k) EXPECT_TRUE(sameBits(back[k], reals[k])) << k;
+  EXPECT_TRUE(read.reals("empty").empty());
+  EXPECT_EQ(read.integer("solver.step"), 1234567890123LL);
+  EXPECT_EQ(read.integers("flags"), (std::vector<long long>{-1, 0, 5}));
+  EXPECT_EQ(read.bytes("intact-bonds"), (std::vector<std::uint8_t>{0, 1, 255, 1}));
+  EXPECT_EQ(read.text("layout"), "displacement:3 damage:1\n");
+  Kokkos::View<double* [3], Kokkos::LayoutRight, TEST_MEMSPACE> restored("restored", 5);
+  perishell::io::takeView(read, "positions", restored, "another model");
+  const auto host = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, restored);
+  for (int node = 0; node < 5; ++node)
+    for (int d = 0; d < 3; ++d) EXPECT_TRUE(sameBits(host(node, d), node / 7.0 + d));
+
+  // What does not fit is named with the file and the entry.
+  Kokkos::View<double* [3], Kokkos::LayoutRight, TEST_MEMSPACE> larger("larger", 6);
+  const std::string sizes = messageOf<perishell::io::CheckpointError>(
+      [&] { perishell::io::takeView(read, "positions", larger, "another model"); });
+  EXPECT_EQ(sizes, "checkpoint " + path + ": 'positions' holds 15 values where this run has 18: another model");
+  const std::string missing = messageOf<perishell::io::CheckpointError>([&] { read.reals("velocities"); });
+  EXPECT_EQ(missing, "checkpoint " + path +
+                         ": no entry 'velocities' (written by another version of perishell, or by the run of another "
+                         "deck)");
+  EXPECT_THROW(read.integer("flags"), perishell::io::CheckpointError);  // three values, not one
+  // Not a checkpoint, and no file at all.
+  std::ofstream(directory / "text.h5") << "not HDF5\n";
+  const std::string notHdf5 =
+      messageOf<perishell::io::CheckpointError>([&] { perishell::io::Checkpoint::read(directory / "text.h5"); });
+  EXPECT_EQ(notHdf5.rfind("checkpoint " + directory / "text.h5" + ": cannot be read (HDF5 file", 0), 0u) << notHdf5;
+  const std::string none =
+      messageOf<perishell::io::CheckpointError>([&] { perishell::io::Checkpoint::read(directory / "none.h5"); });
+  EXPECT_EQ(none.rfind("checkpoint " + directory / "none.h5" + ": no such file", 0), 0u) << none;
+}
+
+TEST(TEST_CATEGORY, output_csv_history_continues_an_earlier_run_cutting_its_later_rows) {
+  const TemporaryDirectory directory;
+  const std::string path = directory / "history.csv";
+  const std::vector<std::string> columns = {"step", "energy [J]"};
+  {
+    perishell::io::CsvHistory earlier(path, columns);
+    for (int row = 0; row < 5; ++row) earlier.append({double(row), row / 3.0});
+  }
+  // Continued after row 3: rows 3 and 4 of the interrupted run go, the new ones follow.
+  perishell::io::CsvHistory continued(path, columns, 3);
+  EXPECT_EQ(continued.numRows(), 3u);
+  continued.append({30.0, 0.5});
+  EXPECT_EQ(readFile(path), "step,energy [J]\n0,0\n1,0.33333333333333331\n2,0.66666666666666663\n30,0.5\n");
+  EXPECT_EQ(countTemporaries(directory.path()), 0);
+
+  const std::string fewer = messageOf<std::runtime_error>([&] { perishell::io::CsvHistory(path, columns, 9); });
+  EXPECT_EQ(fewer, "cannot continue the history '" + path + "': it has 4 whole rows, the checkpoint was written "
+                   "after row 9");
+  const std::string other =
+      messageOf<std::runtime_error>([&] { perishell::io::CsvHistory(path, {"step", "time [s]"}, 1); });
+  EXPECT_EQ(other, "cannot continue the history '" + path + "': its header is not this run's columns (step,time [s])");
+  EXPECT_THROW(perishell::io::CsvHistory(directory / "none.csv", columns, 0), std::runtime_error);
+}
+
+TEST(TEST_CATEGORY, output_xdmf_series_continues_an_earlier_run_dropping_its_later_steps) {
+  const TemporaryDirectory directory;
+  const auto mesh = plate();
+  std::vector<perishell::io::XdmfTimeSeriesWriter::StepRecord> kept;
+  std::string xmfAfterTwo;
+  {
+    perishell::io::XdmfTimeSeriesWriter earlier(directory.path(), "plate", mesh);
+    for (int step = 0; step < 4; ++step) {
+      earlier.writeStep(0.25 * step, {{"damage", 1, nodalValues(1, step)}, {"displacement", 3, nodalValues(3, step)}});
+      if (step == 1) {
+        kept = earlier.steps();
+        xmfAfterTwo = readFile(earlier.xdmfPath());
+      }
+    }
+  }
+  // A restart after step 1: steps 2 and 3 of the interrupted run go, the series goes on from there.
+  perishell::io::XdmfTimeSeriesWriter continued(directory.path(), "plate", mesh);
+  continued.continueSeries(kept);
+  EXPECT_EQ(continued.numSteps(), 2);
+  EXPECT_EQ(readFile(continued.xdmfPath()), xmfAfterTwo);
+  EXPECT_EQ(filesIn(directory.path()),
+            (std::vector<std::string>{"plate.xmf", "plate_000000.h5", "plate_000001.h5", "plate_mesh.h5"}));
+  continued.writeStep(0.6, {{"damage", 1, nodalValues(1, 9.0)}, {"displacement", 3, nodalValues(3, 9.0)}});
+  const auto damage = readDataset(directory / "plate_000002.h5", "/fields/damage", false);
+  EXPECT_TRUE(sameBits(damage.doubles[4], nodalValues(1, 9.0)(4, 0)));
+  const auto xmf = readFile(continued.xdmfPath());
+  EXPECT_NE(xmf.find("<Time Value=\"0.59999999999999998\"/>"), std::string::npos) << xmf;
+  EXPECT_EQ(xmf.find("<Time Value=\"0.75\"/>"), std::string::npos) << xmf;
+
+  // A step the checkpoint lists but the directory lacks is named.
+  fs::remove(directory / "plate_000001.h5");
+  perishell::io::XdmfTimeSeriesWriter broken(directory.path(), "plate", mesh);
+  const std::string message = messageOf<std::runtime_error>([&] { broken.continueSeries(kept); });
+  EXPECT_NE(message.find("step 1 of the run to continue is missing (" + directory / "plate_000001.h5" + ")"),
+            std::string::npos)
+      << message;
 }
 
 }  // namespace

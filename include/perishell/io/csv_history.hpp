@@ -25,6 +25,12 @@ class CsvHistory {
   // step. Column names must be non-empty and free of commas, quotes and line breaks.
   CsvHistory(std::string path, std::vector<std::string> columnNames);
 
+  // Continues the history an earlier run left at `path` (a restart, io/checkpoint.hpp): its
+  // header must name the same columns and its first keepRows rows stay; rows after them (the
+  // interrupted run's beyond its checkpoint) are cut off, atomically. Throws
+  // std::runtime_error naming the file when it is missing, has other columns or fewer rows.
+  CsvHistory(std::string path, std::vector<std::string> columnNames, std::size_t keepRows);
+
   // Appends the row to the file. Throws std::invalid_argument naming the expected and actual
   // value counts, std::runtime_error naming the file when the write fails (a full disk).
   void append(const std::vector<double>& row);
@@ -34,6 +40,9 @@ class CsvHistory {
   std::size_t numRows() const { return numRows_; }
 
  private:
+  static std::string headerLine(const std::vector<std::string>& columnNames);
+  void openToAppend();
+
   struct CloseFile {
     void operator()(std::FILE* file) const { std::fclose(file); }
   };

@@ -225,6 +225,11 @@ struct Output {
   // History probes: each point snaps to its nearest mesh node at run start (solvers/history_columns.hpp),
   // whose displacement and rotation vector are written as columns <name>-ux .. <name>-rz.
   std::vector<NamedPoint> probes;  // in deck order
+  // Checkpoints (docs/reliability.md §9): every this many steps or increments, and/or every
+  // this many wall-clock minutes; 0: none on a schedule (a stopped run still writes one).
+  long long checkpointEvery = 0;
+  double checkpointMinutes = 0.0;
+  bool checkpoints() const { return checkpointEvery > 0 || checkpointMinutes > 0.0; }
 };
 
 // Load factor of a curve at time t (docs/deck.md: ramp t/end-time clamped to [0, 1]; step

@@ -6,7 +6,9 @@
 //  - the result files an earlier run left are removed before this run writes (a shorter rerun
 //    would otherwise leave the longer run's step files beside its own): results.xmf,
 //    results_mesh.h5, results_NNNNNN.h5, history.csv, timings.csv, and the temporaries
-//    "<file>.tmp.<pid>" of processes that no longer run (io/atomic_file.hpp).
+//    checkpoint.h5 and the temporaries "<file>.tmp.<pid>" of processes that no longer run
+//    (io/atomic_file.hpp). A restart (`run --restart DIR`) keeps the earlier run's results,
+//    which it continues, and removes only the temporaries.
 // Other files in the directory (check --output's model files, the user's own) are left alone.
 #include <iosfwd>
 #include <stdexcept>
@@ -22,9 +24,13 @@ class OutputDirectoryError : public std::runtime_error {
 
 class OutputDirectoryLock {
  public:
-  // Creates the directory, takes the lock, clears an earlier run's result files; notes on
-  // log what it took over or removed. Throws OutputDirectoryError.
-  OutputDirectoryLock(const std::string& directory, std::ostream& log);
+  enum class EarlierResults { Clear, Keep };
+
+  // Creates the directory, takes the lock, clears an earlier run's result files (unless
+  // Keep: a restart continues them); notes on log what it took over or removed. Throws
+  // OutputDirectoryError.
+  OutputDirectoryLock(const std::string& directory, std::ostream& log,
+                      EarlierResults earlier = EarlierResults::Clear);
   ~OutputDirectoryLock();  // removes the lock file
   OutputDirectoryLock(const OutputDirectoryLock&) = delete;
   OutputDirectoryLock& operator=(const OutputDirectoryLock&) = delete;

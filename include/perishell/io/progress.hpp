@@ -26,6 +26,9 @@ class ProgressReporter {
   // load factor and iterations).
   bool update(long long step, const std::string& state);
 
+  // A continued run (a restart) starts at step `done`: the ETA takes the rate of this run's steps.
+  void continueFrom(long long done) { firstStep_ = done; }
+
   double elapsedSeconds() const;
 
   static Clock steadyClock();
@@ -37,6 +40,7 @@ class ProgressReporter {
   Clock clock_;
   double start_;
   double lastPrint_;
+  long long firstStep_ = 0;
   bool printed_ = false;
 };
 

@@ -60,12 +60,7 @@ class XdmfTimeSeriesWriter {
   // or 3, or values whose extents are not nodes x components.
   void writeStep(double time, const std::vector<NodalField>& fields);
 
-  int numSteps() const { return static_cast<int>(steps_.size()); }
-  std::string xdmfPath() const;
-  std::string meshPath() const;
-  std::string stepPath(int step) const;
-
- private:
+  // What a step holds: its time and its fields' names and components.
   struct FieldRecord {
     std::string name;
     int components;
@@ -74,6 +69,21 @@ class XdmfTimeSeriesWriter {
     double time;
     std::vector<FieldRecord> fields;
   };
+
+  // Continues the series an earlier run over the same mesh left in this directory (a restart,
+  // io/checkpoint.hpp): its first earlier.size() steps stay as written, their step files must
+  // exist (else std::runtime_error naming the first missing one); its step files after those are
+  // removed and the .xmf is rewritten to list the kept steps, so writeStep appends to them.
+  // Call before the first writeStep.
+  void continueSeries(std::vector<StepRecord> earlier);
+
+  int numSteps() const { return static_cast<int>(steps_.size()); }
+  const std::vector<StepRecord>& steps() const { return steps_; }
+  std::string xdmfPath() const;
+  std::string meshPath() const;
+  std::string stepPath(int step) const;
+
+ private:
 
   std::string stepFileName(int step) const;
   std::string xdmfHeader() const;

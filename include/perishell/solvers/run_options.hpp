@@ -24,6 +24,9 @@ struct RunOptions {
   bool timePhases = false;
   // The longest a long implicit increment goes without a progress line [s].
   double progressEverySeconds = 2.0;
+  // Continue the run whose output directory this is, from its checkpoint.h5
+  // (solvers/run_checkpoint.hpp); the run writes on into that directory.
+  std::string restartDirectory;
 };
 
 // (phase, seconds) rows, in the order written.

@@ -15,6 +15,7 @@
 #include <perishell/core/fenced_seconds.hpp>
 #include <perishell/fracture/carry_broken_bonds.hpp>
 #include <perishell/fracture/damage.hpp>
+#include <perishell/io/checkpoint.hpp>
 #include <perishell/pd/bond_forces.hpp>
 #include <perishell/solvers/explicit/external_actions.hpp>
 #include <perishell/solvers/explicit/nodal_inertia.hpp>
@@ -205,6 +206,50 @@ class CentralDifferenceSolver {
               << criticalTimeStep_ << " s, below dt = " << timeStep_ << " s; lower solver.dt or leave it out";
       throw ExplicitInstability(message.str());
     }
+  }
+
+  // The state between two steps, for a checkpoint (io/checkpoint.hpp, entries "explicit.*"):
+  // displacements, rotations, half-step velocities, intact bonds, the per-node energy
+  // accumulators, and time, step, dt, critical step and initial energy. Everything else
+  // (forces, scratch, the monitor's strain and kinetic energy) is recomputed before it is read.
+  void saveTo(io::Checkpoint& checkpoint) const {
+    putView(checkpoint, "explicit.displacements", state_.displacements);
+    putView(checkpoint, "explicit.rotations", state_.rotations);
+    putView(checkpoint, "explicit.velocities", velocities_);
+    putView(checkpoint, "explicit.intact-bonds", intact_);
+    putView(checkpoint, "explicit.fracture-energy", fractureEnergy_);
+    putView(checkpoint, "explicit.external-work", externalWork_);
+    putView(checkpoint, "explicit.support-work", supportWork_);
+    putView(checkpoint, "explicit.damping-work", dampingWork_);
+    checkpoint.putReals("explicit.clock", {time_, timeStep_, criticalTimeStep_, initialEnergy_});
+    checkpoint.putInteger("explicit.step", step_);
+  }
+
+  // Continues from saveTo's state: a solver over the same bodies (with an adaptive zone, those
+  // of the zone the checkpoint recorded) then steps on bit for bit as the saved one would have.
+  // Throws io::CheckpointError when the checkpoint's sizes are not this model's.
+  void restoreFrom(const io::Checkpoint& checkpoint) {
+    const std::string mismatch = "the deck's model is not the one the checkpoint's run solved (another mesh, zones or "
+                                 "horizon)";
+    takeView(checkpoint, "explicit.displacements", state_.displacements, mismatch);
+    takeView(checkpoint, "explicit.rotations", state_.rotations, mismatch);
+    takeView(checkpoint, "explicit.velocities", velocities_, mismatch);
+    takeView(checkpoint, "explicit.intact-bonds", intact_, mismatch);
+    Kokkos::deep_copy(space_, intactNext_, intact_);
+    takeView(checkpoint, "explicit.fracture-energy", fractureEnergy_, mismatch);
+    takeView(checkpoint, "explicit.external-work", externalWork_, mismatch);
+    takeView(checkpoint, "explicit.support-work", supportWork_, mismatch);
+    takeView(checkpoint, "explicit.damping-work", dampingWork_, mismatch);
+    const auto& clock = checkpoint.reals("explicit.clock");
+    if (clock.size() != 4) throw io::CheckpointError(checkpoint.context() + "'explicit.clock' holds " +
+                                                     std::to_string(clock.size()) + " values, not 4");
+    time_ = clock[0];
+    timeStep_ = clock[1];
+    criticalTimeStep_ = clock[2];
+    initialEnergy_ = clock[3];
+    step_ = checkpoint.integer("explicit.step");
+    nonFinite_ = false;
+    space_.fence();
   }
 
   long long stepIndex() const { return step_; }

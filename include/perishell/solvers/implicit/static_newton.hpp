@@ -11,6 +11,7 @@
 // The state lives on the device; callers copy it to the host only for output.
 #include <perishell/assembly/dirichlet.hpp>
 #include <perishell/core/fenced_seconds.hpp>
+#include <perishell/io/checkpoint.hpp>
 #include <perishell/assembly/nodal_block_crs.hpp>
 #include <perishell/pd/bond_tangent.hpp>
 #include <perishell/shell/shell_body.hpp>
@@ -217,6 +218,16 @@ class StaticNewtonSolver {
   // and retried at half the length, at most maxCuts times. Needs proportional loading
   // (arcLengthObstacle() empty).
   IncrementReport advanceByArcLength(double stopAt = 1.0);
+
+  // The converged state between increments, for a checkpoint (io/checkpoint.hpp, entries
+  // "implicit.*"): displacements, rotations, the load factor and where the supports stand, the
+  // next sub-step's size, the preconditioner in use, and the arc-length state.
+  void saveTo(io::Checkpoint& checkpoint) const;
+  // Continues from saveTo's state on a solver of the same model. Where the saved solver held a
+  // fresh factor of the converged tangent, the same factor is made again here, so the next
+  // increment runs as the saved solver's would have (bit for bit on one backend and build).
+  // Throws io::CheckpointError when the checkpoint's sizes are not this model's.
+  void restoreFrom(const io::Checkpoint& checkpoint);
 
   double loadFactor() const { return loadFactor_; }
   // Called after every Newton iteration and every cut with the load factor being tried and

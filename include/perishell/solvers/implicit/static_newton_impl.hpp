@@ -117,6 +117,48 @@ IncrementReport StaticNewtonSolver<ExecutionSpaceT>::advanceTo(double loadFactor
 }
 
 template <class ExecutionSpaceT>
+void StaticNewtonSolver<ExecutionSpaceT>::saveTo(io::Checkpoint& checkpoint) const {
+  putView(checkpoint, "implicit.displacements", state_.displacements);
+  putView(checkpoint, "implicit.rotations", state_.rotations);
+  checkpoint.putReals("implicit.factors", {loadFactor_, prescribedFactor_, preferredStep_, arcLength_, maxArcLength_});
+  checkpoint.putIntegers("implicit.flags", {static_cast<long long>(active_), factor_ && factorCurrent_ ? 1 : 0,
+                                            indefiniteNoted_ ? 1 : 0, hasArcDirection_ ? 1 : 0});
+  if (hasArcDirection_) putView(checkpoint, "implicit.arc-direction", lastArcDirection_);
+}
+
+template <class ExecutionSpaceT>
+void StaticNewtonSolver<ExecutionSpaceT>::restoreFrom(const io::Checkpoint& checkpoint) {
+  const std::string mismatch =
+      "the deck's model is not the one the checkpoint's run solved (another mesh, zones or horizon)";
+  takeView(checkpoint, "implicit.displacements", state_.displacements, mismatch);
+  takeView(checkpoint, "implicit.rotations", state_.rotations, mismatch);
+  const auto& factors = checkpoint.reals("implicit.factors");
+  const auto& flags = checkpoint.integers("implicit.flags");
+  if (factors.size() != 5 || flags.size() != 4)
+    throw io::CheckpointError(checkpoint.context() + "'implicit.factors' or 'implicit.flags' is not of this version");
+  loadFactor_ = factors[0];
+  prescribedFactor_ = factors[1];
+  preferredStep_ = factors[2];
+  arcLength_ = factors[3];
+  maxArcLength_ = factors[4];
+  // Auto may have switched during the run; a preconditioner the deck names stays the deck's.
+  if (options_.preconditioner == deck::Preconditioner::Auto)
+    active_ = flags[0] == static_cast<long long>(deck::Preconditioner::Cholesky) ? deck::Preconditioner::Cholesky
+                                                                                  : deck::Preconditioner::Amg;
+  indefiniteNoted_ = flags[2] != 0;
+  hasArcDirection_ = flags[3] != 0;
+  if (hasArcDirection_) {
+    makeArcLengthVectors();
+    takeView(checkpoint, "implicit.arc-direction", lastArcDirection_, mismatch);
+  }
+  if (flags[1] != 0 && usesFactor()) {
+    IncrementReport scratch;
+    factorConvergedTangent(scratch);
+  }
+  space_.fence();
+}
+
+template <class ExecutionSpaceT>
 auto StaticNewtonSolver<ExecutionSpaceT>::constrainedTangent(const VectorView<Memory>& rhs, IncrementReport& report)
     -> Matrix {
   using Clock = std::chrono::steady_clock;
