@@ -624,6 +624,17 @@ TEST(TEST_CATEGORY, output_csv_history_rejects_bad_rows_and_names) {
   EXPECT_EQ(filesIn(directory.path()), std::vector<std::string>{"history.csv"});
 }
 
+// Positions x_(node, d) = node / 7 + d filled on the device (a free function: nvcc refuses
+// extended lambdas in a test body).
+Kokkos::View<double* [3], Kokkos::LayoutRight, TEST_MEMSPACE> devicePositions(int numNodes) {
+  Kokkos::View<double* [3], Kokkos::LayoutRight, TEST_MEMSPACE> positions("positions", numNodes);
+  Kokkos::parallel_for(
+      "fill positions", Kokkos::RangePolicy<TEST_EXECSPACE>(0, numNodes), KOKKOS_LAMBDA(const int node) {
+        for (int d = 0; d < 3; ++d) positions(node, d) = node / 7.0 + d;
+      });
+  return positions;
+}
+
 TEST(TEST_CATEGORY, output_checkpoint_round_trips_every_value_bit_for_bit) {
   const TemporaryDirectory directory;
   const std::string path = directory / "checkpoint.h5";
@@ -636,11 +647,7 @@ TEST(TEST_CATEGORY, output_checkpoint_round_trips_every_value_bit_for_bit) {
   saved.putBytes("intact-bonds", {0, 1, 255, 1});
   saved.putText("layout", "displacement:3 damage:1\n");
   // A device view in and out, through the host.
-  Kokkos::View<double* [3], Kokkos::LayoutRight, TEST_MEMSPACE> positions("positions", 5);
-  Kokkos::parallel_for(
-      "fill positions", Kokkos::RangePolicy<TEST_EXECSPACE>(0, 5), KOKKOS_LAMBDA(const int node) {
-        for (int d = 0; d < 3; ++d) positions(node, d) = node / 7.0 + d;
-      });
+  const auto positions = devicePositions(5);
   perishell::io::putView(saved, "positions", positions);
   saved.write(path);
   EXPECT_EQ(countTemporaries(directory.path()), 0);

@@ -1,6 +1,7 @@
 #pragma once
 // Per-node geometry of the shell mid-surface: unit normals and volumes (model.md §1).
-// Element mapping: one thread per quad, scattered to its nodes with atomic_add.
+// Element mapping: one thread per quad, then one per node gathering its quads' values in
+// element order (mesh/node_incidence.hpp): the same bits on every run and backend.
 #include <perishell/mesh/node_areas.hpp>
 #include <perishell/mesh/quad_mesh.hpp>
 
@@ -20,11 +21,11 @@ template <class ExecutionSpaceT, class MemorySpaceT>
 CoordinateView<MemorySpaceT> computeNodeNormals(const ExecutionSpaceT& space,
                                                 const QuadMesh<MemorySpaceT>& mesh) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
-  CoordinateView<MemorySpaceT> normals("node normals", mesh.numNodes());
   const auto coordinates = mesh.coordinates;
   const auto quads = mesh.quads;
+  CoordinateView<MemorySpaceT> vectorAreas("element vector areas", mesh.numElements());
   Kokkos::parallel_for(
-      "perishell::computeNodeNormals::scatter",
+      "perishell::computeNodeNormals::elements",
       Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, mesh.numElements()),
       KOKKOS_LAMBDA(const int element) {
         double x[4][3];
@@ -34,13 +35,21 @@ CoordinateView<MemorySpaceT> computeNodeNormals(const ExecutionSpaceT& space,
           d1[k] = x[2][k] - x[0][k];
           d2[k] = x[3][k] - x[1][k];
         }
-        const double vectorArea[3] = {0.5 * (d1[1] * d2[2] - d1[2] * d2[1]),
-                                      0.5 * (d1[2] * d2[0] - d1[0] * d2[2]),
-                                      0.5 * (d1[0] * d2[1] - d1[1] * d2[0])};
         // A triangle (a b c c) has three corners: its vector area, 1/2 (c - a) x (c - b), is
         // the formula's with x_3 = x_2.
-        for (int a = 0; a < cornerCount(quads, element); ++a)
-          for (int k = 0; k < 3; ++k) Kokkos::atomic_add(&normals(quads(element, a), k), vectorArea[k]);
+        vectorAreas(element, 0) = 0.5 * (d1[1] * d2[2] - d1[2] * d2[1]);
+        vectorAreas(element, 1) = 0.5 * (d1[2] * d2[0] - d1[0] * d2[2]);
+        vectorAreas(element, 2) = 0.5 * (d1[0] * d2[1] - d1[1] * d2[0]);
+      });
+  const auto incidence = makeNodeIncidence(space, quads, mesh.numNodes());
+  CoordinateView<MemorySpaceT> normals("node normals", mesh.numNodes());
+  Kokkos::parallel_for(
+      "perishell::computeNodeNormals::gather", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, mesh.numNodes()),
+      KOKKOS_LAMBDA(const int node) {
+        double sum[3] = {0.0, 0.0, 0.0};
+        for (RowOffset i = incidence.offsets(node); i < incidence.offsets(node + 1); ++i)
+          for (int k = 0; k < 3; ++k) sum[k] += vectorAreas(incidence.entries(i) / 4, k);
+        for (int k = 0; k < 3; ++k) normals(node, k) = sum[k];
       });
   int firstDegenerateNode = INT_MAX;
   Kokkos::parallel_reduce(

@@ -4,6 +4,7 @@
 // values through the pattern's precomputed slots. One thread per element; the elements
 // themselves are shell/mitc4_shell.hpp (both solvers) and shell/one_point_shell.hpp
 // (the explicit solver's default).
+#include <perishell/mesh/node_incidence.hpp>
 #include <perishell/mesh/quad_mesh.hpp>
 #include <perishell/pd/pd_body.hpp>
 #include <perishell/shell/explicit_triangle.hpp>
@@ -165,18 +166,9 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
   body.quadraticEdges = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostEdgeView);
   const auto quadraticEdges = body.quadraticEdges;
   if (kind == ShellElementKind::OnePoint) {
-    // Incidence over each element's distinct corners (a triangle's node 2 once).
-    Kokkos::View<RowOffset*, Kokkos::HostSpace> offsets("shell node element offsets", mesh.numNodes() + 1);
-    for (std::size_t k = 0; k < quads.extent(0); ++k)
-      for (int a = 0; a < mesh::cornerCount(quads, k); ++a) ++offsets(quads(k, a) + 1);
-    for (LocalIndex node = 0; node < mesh.numNodes(); ++node) offsets(node + 1) += offsets(node);
-    Kokkos::View<LocalIndex*, Kokkos::HostSpace> entries("shell node element entries", offsets(mesh.numNodes()));
-    std::vector<RowOffset> next(offsets.data(), offsets.data() + mesh.numNodes());
-    for (std::size_t k = 0; k < quads.extent(0); ++k)
-      for (int a = 0; a < mesh::cornerCount(quads, k); ++a)
-        entries(next[quads(k, a)]++) = static_cast<LocalIndex>(4 * k + a);
-    body.nodeElementOffsets = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, offsets);
-    body.nodeElementEntries = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, entries);
+    const auto incidence = mesh::makeNodeIncidence(space, body.quads, mesh.numNodes());
+    body.nodeElementOffsets = incidence.offsets;
+    body.nodeElementEntries = incidence.entries;
     body.elementForces = decltype(body.elementForces)("shell element forces", quads.extent(0));
     body.assembly = defaultElementForceAssembly<ExecutionSpaceT>();
     return body;
@@ -295,6 +287,9 @@ void addShellNodalStiffness(const ExecutionSpaceT& space, const ShellBody<Memory
                             const VectorView<MemorySpaceT>& translational, const VectorView<MemorySpaceT>& rotational) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   const bool onePoint = body.kind == ShellElementKind::OnePoint;
+  // Per element and corner (translational, rotational), then gathered by node in element order.
+  const Kokkos::View<double* [4][2], Kokkos::LayoutRight, MemorySpaceT> cornerStiffness("shell corner stiffness",
+                                                                                       body.numElements());
   Kokkos::parallel_for(
       "perishell::shell::addShellNodalStiffness", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numElements()),
       KOKKOS_LAMBDA(const LocalIndex e) {
@@ -325,10 +320,23 @@ void addShellNodalStiffness(const ExecutionSpaceT& space, const ShellBody<Memory
               turning[a] += body.localStiffness(e, 6 * a + 3 + d, 6 * a + 3 + d) / 3.0;
             }
         }
-        for (int a = 0; a < corners; ++a) {
-          Kokkos::atomic_add(&translational(body.quads(e, a)), moving[a]);
-          Kokkos::atomic_add(&rotational(body.quads(e, a)), turning[a]);
+        for (int a = 0; a < 4; ++a) {
+          cornerStiffness(e, a, 0) = a < corners ? moving[a] : 0.0;
+          cornerStiffness(e, a, 1) = a < corners ? turning[a] : 0.0;
         }
+      });
+  const auto incidence = mesh::makeNodeIncidence(space, body.quads, static_cast<LocalIndex>(translational.extent(0)));
+  Kokkos::parallel_for(
+      "perishell::shell::gatherShellNodalStiffness",
+      Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, static_cast<LocalIndex>(translational.extent(0))),
+      KOKKOS_LAMBDA(const LocalIndex node) {
+        double moving = 0.0, turning = 0.0;
+        for (RowOffset i = incidence.offsets(node); i < incidence.offsets(node + 1); ++i) {
+          moving += cornerStiffness(incidence.entries(i) / 4, incidence.entries(i) % 4, 0);
+          turning += cornerStiffness(incidence.entries(i) / 4, incidence.entries(i) % 4, 1);
+        }
+        translational(node) += moving;
+        rotational(node) += turning;
       });
 }
 
