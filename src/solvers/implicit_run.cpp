@@ -214,6 +214,15 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   if (checkpoint)
     log << "restart: continuing after increment " << firstIncrement - 1 << " (load factor "
         << formatNumber(solver.loadFactor(), 6) << ") of " << checkpoint->source() << "\n";
+  // Under load control increment k ends at load factor k / increments: the deck must keep the
+  // schedule of the run that wrote the checkpoint.
+  if (checkpoint && !arcLength &&
+      std::abs(solver.loadFactor() - double(firstIncrement - 1) / deckIncrements) > 1e-12 * solver.loadFactor())
+    throw std::invalid_argument("restart: the checkpoint is after increment " + std::to_string(firstIncrement - 1) +
+                                " at load factor " + formatNumber(solver.loadFactor(), 6) + ", which solver.increments = " +
+                                std::to_string(deckIncrements) + " puts at " +
+                                formatNumber(double(firstIncrement - 1) / deckIncrements, 6) +
+                                ": keep the increments of the run that wrote it (the load schedule ends at factor 1)");
   if (checkpoint && (firstIncrement > increments || (arcLength && solver.loadFactor() >= 1.0)))
     throw std::invalid_argument("restart: the checkpoint is at increment " + std::to_string(firstIncrement - 1) +
                                 " (load factor " + formatNumber(solver.loadFactor(), 6) + "), and this run ends at "

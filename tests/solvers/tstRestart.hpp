@@ -225,6 +225,23 @@ TEST(TEST_CATEGORY, implicit_amg_run_stopped_and_continued_equals_the_uninterrup
   expectSameHistory(expected.history, actual.history);
   expectSameSeries(expected.xmf, actual.xmf);
   EXPECT_EQ(perishell_test_run_files::readHistory(pieces.path() + "/history.csv").rows.size(), 1u);
+
+  // A deck with another load schedule cannot continue it: increment 1 of 4 is not the
+  // checkpoint's load factor 0.5.
+  const auto otherSchedule = perishell::model::buildModel(runDeck("small_mixed_implicit_strip.yaml",
+                                                                  "    history: [reactions]\n", "",
+                                                                  "    increments: 2\n", "    increments: 4\n"));
+  const ScratchDirectory stopped;
+  run(Solver::Implicit, model, stopped.path(), false, 1);
+  try {
+    run(Solver::Implicit, otherSchedule, stopped.path(), true, std::nullopt);
+    ADD_FAILURE() << "a restart with another load schedule ran";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("restart: the checkpoint is after increment 1 at load factor 0.5, which "
+                                             "solver.increments = 4 puts at 0.25: keep the increments"),
+              std::string::npos)
+        << error.what();
+  }
 }
 
 TEST(TEST_CATEGORY, restart_refuses_a_checkpoint_that_does_not_fit_the_deck) {
