@@ -19,12 +19,15 @@ const typename MapT::mapped_type* find(const MapT& map, const std::string& name)
   return it == map.end() ? nullptr : &it->second;
 }
 
-void writeGroup(hid_t file, const char* groupName, const std::string& path,
-                const std::function<void(hid_t group)>& fill) {
+// One group of entries (name -> a vector or a string), one dataset each.
+template <class MapT>
+void writeEntries(hid_t file, const char* groupName, const MapT& entries, hid_t memoryType, hid_t fileType,
+                  const std::string& path) {
   Hdf5Handle group(checkHdf5(H5Gcreate2(file, groupName, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
                              std::string("create group '") + groupName + "'", path),
                    H5Gclose);
-  fill(group.get());
+  for (const auto& [name, values] : entries)
+    writeDataset(group.get(), name, memoryType, fileType, {values.size()}, values.data(), path);
 }
 
 // Entries of one group, each read whole as memoryType into a vector of ValueT.
@@ -114,22 +117,10 @@ void Checkpoint::write(const std::string& path) const {
   writeHdf5FileAtomically(path, [this](hid_t file, const std::string& temporary) {
     const std::string format = formatText;
     writeDataset(file, "format", H5T_NATIVE_CHAR, H5T_STD_I8LE, {format.size()}, format.data(), temporary);
-    writeGroup(file, "reals", temporary, [&](hid_t group) {
-      for (const auto& [name, values] : reals_)
-        writeDataset(group, name, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {values.size()}, values.data(), temporary);
-    });
-    writeGroup(file, "integers", temporary, [&](hid_t group) {
-      for (const auto& [name, values] : integers_)
-        writeDataset(group, name, H5T_NATIVE_LLONG, H5T_STD_I64LE, {values.size()}, values.data(), temporary);
-    });
-    writeGroup(file, "bytes", temporary, [&](hid_t group) {
-      for (const auto& [name, values] : bytes_)
-        writeDataset(group, name, H5T_NATIVE_UINT8, H5T_STD_U8LE, {values.size()}, values.data(), temporary);
-    });
-    writeGroup(file, "texts", temporary, [&](hid_t group) {
-      for (const auto& [name, text] : texts_)
-        writeDataset(group, name, H5T_NATIVE_CHAR, H5T_STD_I8LE, {text.size()}, text.data(), temporary);
-    });
+    writeEntries(file, "reals", reals_, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, temporary);
+    writeEntries(file, "integers", integers_, H5T_NATIVE_LLONG, H5T_STD_I64LE, temporary);
+    writeEntries(file, "bytes", bytes_, H5T_NATIVE_UINT8, H5T_STD_U8LE, temporary);
+    writeEntries(file, "texts", texts_, H5T_NATIVE_CHAR, H5T_STD_I8LE, temporary);
   });
 }
 

@@ -18,6 +18,7 @@
 #include <type_traits>
 #include <cstring>
 #include <map>
+#include <utility>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -147,6 +148,18 @@ RunFiles filesOf(const std::string& directory) {
           perishell::io::Checkpoint::read(perishell::solvers::checkpointPath(directory))};
 }
 
+// The interrupted run (pieces) ends as the uninterrupted one (whole): the checkpoints' entries,
+// history.csv and results.xmf. Returns both runs' files for further checks.
+std::pair<RunFiles, RunFiles> expectSameRun(const std::string& whole, const std::string& pieces,
+                                            const std::vector<std::string>& realEntries,
+                                            const std::vector<std::string>& otherEntries) {
+  auto expected = filesOf(whole), actual = filesOf(pieces);
+  expectSameState(expected.checkpoint, actual.checkpoint, realEntries, otherEntries);
+  expectSameHistory(expected.history, actual.history);
+  expectSameSeries(expected.xmf, actual.xmf);
+  return {std::move(expected), std::move(actual)};
+}
+
 }  // namespace
 
 TEST(TEST_CATEGORY, explicit_run_stopped_twice_and_continued_equals_the_uninterrupted_run) {
@@ -164,16 +177,12 @@ TEST(TEST_CATEGORY, explicit_run_stopped_twice_and_continued_equals_the_uninterr
   EXPECT_NE(secondLog.find("restart: continuing from step 50 (t = "), std::string::npos) << secondLog;
   run(Solver::Explicit, model, pieces.path(), true, std::nullopt);
 
-  const auto expected = filesOf(whole.path()), actual = filesOf(pieces.path());
+  const auto [expected, actual] = expectSameRun(
+      whole.path(), pieces.path(),
+      {"explicit.displacements", "explicit.rotations", "explicit.velocities", "explicit.fracture-energy",
+       "explicit.external-work", "explicit.support-work", "explicit.damping-work", "explicit.clock", "output.crack-tip"},
+      {"explicit.intact-bonds", "adaptive.element-is-pd", "explicit-run.zone-switches", "output.history-rows"});
   EXPECT_EQ(actual.checkpoint.integer("explicit.step"), 200);
-  expectSameState(expected.checkpoint, actual.checkpoint,
-                  {"explicit.displacements", "explicit.rotations", "explicit.velocities", "explicit.fracture-energy",
-                   "explicit.external-work", "explicit.support-work", "explicit.damping-work", "explicit.clock",
-                   "output.crack-tip"},
-                  {"explicit.intact-bonds", "adaptive.element-is-pd", "explicit-run.zone-switches",
-                   "output.history-rows"});
-  expectSameHistory(expected.history, actual.history);
-  expectSameSeries(expected.xmf, actual.xmf);
   // The case is one the restart must carry: bonds broke and the zone grew before step 130.
   const auto& intact = expected.checkpoint.bytes("explicit.intact-bonds");
   EXPECT_GT(std::count(intact.begin(), intact.end(), 0), 0);
@@ -197,12 +206,11 @@ TEST(TEST_CATEGORY, implicit_arc_length_run_stopped_and_continued_equals_the_uni
   EXPECT_NE(secondLog.find("restart: continuing after increment 3 (load factor "), std::string::npos) << secondLog;
   run(Solver::Implicit, model, pieces.path(), true, 10);
 
-  const auto expected = filesOf(whole.path()), actual = filesOf(pieces.path());
-  expectSameState(expected.checkpoint, actual.checkpoint,
-                  {"implicit.displacements", "implicit.rotations", "implicit.factors", "implicit.arc-direction"},
-                  {"implicit.flags", "implicit-run.counters", "output.history-rows"});
-  expectSameHistory(expected.history, actual.history);
-  expectSameSeries(expected.xmf, actual.xmf);
+  const auto actual = expectSameRun(whole.path(), pieces.path(),
+                                    {"implicit.displacements", "implicit.rotations", "implicit.factors",
+                                     "implicit.arc-direction"},
+                                    {"implicit.flags", "implicit-run.counters", "output.history-rows"})
+                          .second;
   EXPECT_EQ(actual.checkpoint.integers("implicit-run.counters").front(), 10);
 }
 
@@ -218,12 +226,8 @@ TEST(TEST_CATEGORY, implicit_amg_run_stopped_and_continued_equals_the_uninterrup
   EXPECT_EQ(perishell_test_run_files::readHistory(pieces.path() + "/history.csv").rows.size(), 1u);
   run(Solver::Implicit, model, pieces.path(), true, std::nullopt);
 
-  const auto expected = filesOf(whole.path()), actual = filesOf(pieces.path());
-  expectSameState(expected.checkpoint, actual.checkpoint,
-                  {"implicit.displacements", "implicit.rotations", "implicit.factors"},
-                  {"implicit.flags", "output.history-rows"});
-  expectSameHistory(expected.history, actual.history);
-  expectSameSeries(expected.xmf, actual.xmf);
+  expectSameRun(whole.path(), pieces.path(), {"implicit.displacements", "implicit.rotations", "implicit.factors"},
+                {"implicit.flags", "output.history-rows"});
   EXPECT_EQ(perishell_test_run_files::readHistory(pieces.path() + "/history.csv").rows.size(), 1u);
 
   // A deck with another load schedule cannot continue it: increment 1 of 4 is not the

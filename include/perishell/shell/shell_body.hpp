@@ -43,12 +43,14 @@ struct ShellBody {
   // K_l was built with: 1 for a plain CCM element, 1 - alpha_bar in the PD-CCM transition
   // (model.md §4, coupling/morphing.hpp). The one-point element takes their mean.
   Kokkos::View<double* [4], Kokkos::LayoutRight, MemorySpaceT> membraneBendingScale;
-  // One-point only: the force assembly, and for Gather the node-to-element incidence (node
-  // n's entries nodeElementOffsets(n) .. (n + 1), each 4 e + a for corner a of element e) and
-  // the elements' forces and energies (24 forces, strain, hourglass) between the two kernels.
-  ElementForceAssembly assembly = ElementForceAssembly::Scatter;
+  // The node-to-element incidence (mesh/node_incidence.hpp: node n's entries
+  // nodeElementOffsets(n) .. (n + 1), each 4 e + a for corner a of element e), for sums over a
+  // node's elements in a fixed order.
   Kokkos::View<RowOffset*, MemorySpaceT> nodeElementOffsets;
   Kokkos::View<LocalIndex*, MemorySpaceT> nodeElementEntries;
+  // One-point only: the force assembly, and for Gather the elements' forces and energies (24
+  // forces, strain, hourglass) between the two kernels.
+  ElementForceAssembly assembly = ElementForceAssembly::Scatter;
   Kokkos::View<double* [26], Kokkos::LayoutRight, MemorySpaceT> elementForces;
   // Per element, a triangle's edges with Allman's term (triangleQuadraticEdges): the one-point
   // kind's triangles build their forces with it, and a triangle's strains take it (both kinds).
@@ -165,10 +167,10 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
   std::copy(hostEdges.begin(), hostEdges.end(), hostEdgeView.data());
   body.quadraticEdges = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostEdgeView);
   const auto quadraticEdges = body.quadraticEdges;
+  const auto incidence = mesh::makeNodeIncidence(space, body.quads, mesh.numNodes());
+  body.nodeElementOffsets = incidence.offsets;
+  body.nodeElementEntries = incidence.entries;
   if (kind == ShellElementKind::OnePoint) {
-    const auto incidence = mesh::makeNodeIncidence(space, body.quads, mesh.numNodes());
-    body.nodeElementOffsets = incidence.offsets;
-    body.nodeElementEntries = incidence.entries;
     body.elementForces = decltype(body.elementForces)("shell element forces", quads.extent(0));
     body.assembly = defaultElementForceAssembly<ExecutionSpaceT>();
     return body;
@@ -325,15 +327,16 @@ void addShellNodalStiffness(const ExecutionSpaceT& space, const ShellBody<Memory
           cornerStiffness(e, a, 1) = a < corners ? turning[a] : 0.0;
         }
       });
-  const auto incidence = mesh::makeNodeIncidence(space, body.quads, static_cast<LocalIndex>(translational.extent(0)));
+  const auto offsets = body.nodeElementOffsets;
+  const auto entries = body.nodeElementEntries;
   Kokkos::parallel_for(
       "perishell::shell::gatherShellNodalStiffness",
-      Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, static_cast<LocalIndex>(translational.extent(0))),
+      Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, static_cast<LocalIndex>(offsets.extent(0) - 1)),
       KOKKOS_LAMBDA(const LocalIndex node) {
         double moving = 0.0, turning = 0.0;
-        for (RowOffset i = incidence.offsets(node); i < incidence.offsets(node + 1); ++i) {
-          moving += cornerStiffness(incidence.entries(i) / 4, incidence.entries(i) % 4, 0);
-          turning += cornerStiffness(incidence.entries(i) / 4, incidence.entries(i) % 4, 1);
+        for (RowOffset i = offsets(node); i < offsets(node + 1); ++i) {
+          moving += cornerStiffness(entries(i) / 4, entries(i) % 4, 0);
+          turning += cornerStiffness(entries(i) / 4, entries(i) % 4, 1);
         }
         translational(node) += moving;
         rotational(node) += turning;

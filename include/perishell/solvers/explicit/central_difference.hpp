@@ -252,7 +252,6 @@ class CentralDifferenceSolver {
     initialEnergy_ = clock[3];
     step_ = checkpoint.integer("explicit.step");
     nonFinite_ = false;
-    space_.fence();
   }
 
   long long stepIndex() const { return step_; }
@@ -524,7 +523,7 @@ class CentralDifferenceSolver {
         });
     const double startNorm = std::sqrt(dot(q, q));
     if (!(startNorm > 0.0)) throw std::invalid_argument("explicit solver: every DOF is prescribed");
-    combine(q, 1.0 / startNorm, previous, 0.0);
+    scale(q, 1.0 / startNorm);
     std::vector<double> diagonal, offDiagonal;
     double beta = 0.0, ritz = 0.0;
     for (int k = 0; k < maxProducts; ++k) {
@@ -541,7 +540,7 @@ class CentralDifferenceSolver {
       offDiagonal.push_back(beta);
       std::swap(previous, q);
       std::swap(q, product);
-      combine(q, 1.0 / beta, previous, 0.0);
+      scale(q, 1.0 / beta);
     }
     if (!(ritz > 0.0) || !std::isfinite(ritz))
       throw std::runtime_error("explicit solver: the critical time step estimate failed (largest eigenvalue " +
@@ -633,13 +632,12 @@ class CentralDifferenceSolver {
         });
   }
 
-  // a <- scale a + other x b.
-  void combine(const pd::NodalVectorView<MemorySpace>& a, double scale, const pd::NodalVectorView<MemorySpace>& b,
-               double other) const {
+  // a <- factor a.
+  void scale(const pd::NodalVectorView<MemorySpace>& a, double factor) const {
     Kokkos::parallel_for(
-        "perishell::solvers::CentralDifferenceSolver::lanczosCombine",
+        "perishell::solvers::CentralDifferenceSolver::lanczosScale",
         Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, a.extent(0)), KOKKOS_LAMBDA(const std::size_t node) {
-          for (int d = 0; d < 6; ++d) a(node, d) = scale * a(node, d) + other * b(node, d);
+          for (int d = 0; d < 6; ++d) a(node, d) *= factor;
         });
   }
 

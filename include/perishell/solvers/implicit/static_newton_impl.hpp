@@ -155,7 +155,6 @@ void StaticNewtonSolver<ExecutionSpaceT>::restoreFrom(const io::Checkpoint& chec
     IncrementReport scratch;
     factorConvergedTangent(scratch);
   }
-  space_.fence();
 }
 
 template <class ExecutionSpaceT>
