@@ -5,16 +5,18 @@ and Design 40: 3.3 the slit annular plate under a line force, 3.4 the hemispheri
 an 18 degree hole (quarter), 3.8 the hinged cylindrical roof under a central point force
 (quarter, arc-length control through both limit points; §3.8 in the paper). Each
 case is written as a Gmsh 4.1 mesh and a deck, then run by `perishell run` once per
-preconditioner; the table gives wall time, increments, cuts, Newton and Krylov iterations and
+preconditioner and Newton format (solver.newton); the table gives wall time, increments, cuts, Newton and Krylov iterations and
 factorizations (medians over --repeats runs for the time).
 
   perf/shell_benchmarks.py --app build/openmp/apps/perishell --out OUT [--cases slit,hemisphere,roof]
-                           [--preconditioners amg,cholesky,direct] [--repeats 3] [--backend host|device]
+                           [--preconditioners amg,cholesky,direct] [--newton mixed,displacement]
+                           [--repeats 3] [--backend host|device]
 
 Writes OUT/<case>/ (mesh, deck, runs) and OUT/shell_benchmarks.md.
 """
 import argparse
 import csv
+import itertools
 import math
 import os
 import re
@@ -243,7 +245,7 @@ def deck(title, young, poisson, thickness, actions, increments, spacing, control
   mesh: {{generator: gmsh, file: mesh.msh, spacing: {spacing}}}
   material: {{young-modulus: {young}, poisson-ratio: {poisson}, density: 1.0, thickness: {thickness}}}
   zones: {{default: ccm}}{actions}
-  solver: {{type: implicit, increments: {increments}, {control}, preconditioner: PRECONDITIONER}}
+  solver: {{type: implicit, increments: {increments}, {control}, preconditioner: PRECONDITIONER, newton: NEWTON}}
   output: {{directory: out, every: 0, history-every: 1, history: [load-points]{probe_text}}}
 """
 
@@ -293,6 +295,7 @@ def main():
     parser.add_argument("--out", required=True)
     parser.add_argument("--cases", default="slit,hemisphere,roof")
     parser.add_argument("--preconditioners", default="amg,cholesky,direct")
+    parser.add_argument("--newton", default="mixed", help="Newton formats to run: mixed, displacement or both")
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--scale", type=int, default=1, help="mesh refinement factor")
     parser.add_argument("--backend", default="device", choices=["device", "host"])
@@ -303,20 +306,20 @@ def main():
         os.makedirs(directory, exist_ok=True)
         linear = LINEAR_CASES.get(case)
         template = linear[0](directory, args.scale, linear[4]) if linear else CASES[case](directory, args.scale)
-        for preconditioner in args.preconditioners.split(","):
-            deck_path = os.path.join(directory, f"{preconditioner}.yaml")
+        for preconditioner, newton in itertools.product(args.preconditioners.split(","), args.newton.split(",")):
+            name = f"{preconditioner}-{newton}"
+            deck_path = os.path.join(directory, f"{name}.yaml")
             with open(deck_path, "w") as f:
-                f.write(template.replace("PRECONDITIONER", preconditioner).replace(
-                    "directory: out", f"directory: out-{preconditioner}"))
-            runs = [run(args.app, deck_path, args.backend, os.path.join(directory, f"{preconditioner}-{r}.log"))
+                f.write(template.replace("PRECONDITIONER", preconditioner).replace("NEWTON", newton).replace(
+                    "directory: out", f"directory: out-{name}"))
+            runs = [run(args.app, deck_path, args.backend, os.path.join(directory, f"{name}-{r}.log"))
                     for r in range(args.repeats)]
             result = dict(runs[-1], seconds=statistics.median(r["seconds"] for r in runs), value="-", relative="-")
             if linear and result["status"] == 0:
-                value = linear[2] * last_history_value(os.path.join(directory, f"out-{preconditioner}"),
-                                                       linear[1]) / linear[4]
+                value = linear[2] * last_history_value(os.path.join(directory, f"out-{name}"), linear[1]) / linear[4]
                 result.update(value=f"{value:.5g}", relative=f"{value / linear[3]:.4f}")
-            rows.append((case, preconditioner, result))
-            print(f"{case:11s} {preconditioner:9s} {result['seconds']:8.2f} s  exit {result['status']}  "
+            rows.append((case, preconditioner, newton, result))
+            print(f"{case:11s} {preconditioner:9s} {newton:12s} {result['seconds']:8.2f} s  exit {result['status']}  "
                   f"increments {result['increments']}  cuts {result['cuts']}  Newton {result['newton']}  "
                   f"Krylov {result['krylov']}  factorizations {result['factorizations']}  "
                   f"AMG builds {result['builds']}  max |u| {result['max_u']}  limit point {result['limit']}"
@@ -324,11 +327,11 @@ def main():
                   + (f"  ({result['error']})" if result["error"] else ""), flush=True)
     with open(os.path.join(args.out, "shell_benchmarks.md"), "w") as f:
         f.write(f"backend {args.backend}, scale {args.scale}, median of {args.repeats} run(s)\n\n"
-                "| case | preconditioner | exit | wall s | increments | cuts | Newton | Krylov | factorizations |"
+                "| case | preconditioner | Newton format | exit | wall s | increments | cuts | Newton | Krylov | factorizations |"
                 " AMG builds | max abs u | limit point | linear value | ours / reference |\n"
-                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
-        for case, preconditioner, r in rows:
-            f.write(f"| {case} | {preconditioner} | {r['status']} | {r['seconds']:.2f} | {r['increments']} | "
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+        for case, preconditioner, newton, r in rows:
+            f.write(f"| {case} | {preconditioner} | {newton} | {r['status']} | {r['seconds']:.2f} | {r['increments']} | "
                     f"{r['cuts']} | {r['newton']} | {r['krylov']} | {r['factorizations']} | {r['builds']} | "
                     f"{r['max_u']} | {r['limit']} | {r['value']} | {r['relative']} |\n")
     return 0

@@ -23,6 +23,7 @@ readonly TRILINOS_PARTS=(cmake commonTools/build_stats packages/kokkos packages/
 readonly DEBIAN_PACKAGES=(cmake ninja-build g++ make patch ca-certificates dpkg-dev
                           libeigen3-dev libhdf5-dev libgtest-dev libgmock-dev
                           libblas-dev liblapack-dev libsuitesparse-dev  # CHOLMOD (solvers/direct)
+                          libopenblas0-serial  # CHOLMOD's BLAS: 1.9x faster factorizations (docs/implicit.md)
                           python3-numpy python3-matplotlib python3-h5py)  # perf/charts
 
 script_dir=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)

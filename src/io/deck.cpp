@@ -699,7 +699,7 @@ deck::Solver readSolver(const Section& section) {
                                               "damping", "shell-element", "hourglass"};
   const std::vector<std::string> implicitKeys{"type", "increments", "max-iterations", "tolerance",
                                               "preconditioner", "max-cuts", "tangent", "amg-reuse",
-                                              "line-search", "control", "max-increments"};
+                                              "line-search", "control", "max-increments", "newton"};
   std::vector<std::string> allKeys = explicitKeys;
   allKeys.insert(allKeys.end(), implicitKeys.begin() + 1, implicitKeys.end());
   section.allowOnly(allKeys);
@@ -770,6 +770,9 @@ deck::Solver readSolver(const Section& section) {
       settings.maxCuts = int(cuts);
     }
     settings.lineSearch = section.flag("line-search", settings.lineSearch);
+    using Newton = deck::ImplicitSettings::Newton;
+    settings.newton = section.choice<Newton>("newton", {{"mixed", Newton::Mixed}, {"displacement", Newton::Displacement}},
+                                             settings.newton);
     using Control = deck::ImplicitSettings::Control;
     settings.control = section.choice<Control>("control", {{"load", Control::Load}, {"arc-length", Control::ArcLength}},
                                                settings.control);

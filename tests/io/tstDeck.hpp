@@ -281,6 +281,7 @@ perishell:
     preconditioner: jacobi
     tangent: exact
     amg-reuse: 2.0
+    newton: displacement
   output:
     directory: /tmp/perishell-results
     every: 10
@@ -356,6 +357,7 @@ perishell:
   EXPECT_EQ(deck.solver.implicitSettings.preconditioner, deck::Preconditioner::Jacobi);
   EXPECT_EQ(deck.solver.implicitSettings.tangent, deck::Tangent::Exact);
   EXPECT_DOUBLE_EQ(deck.solver.implicitSettings.amgReuse, 2.0);
+  EXPECT_EQ(deck.solver.implicitSettings.newton, deck::ImplicitSettings::Newton::Displacement);
 
   EXPECT_EQ(deck.output.directory, "/tmp/perishell-results");  // absolute stays
   EXPECT_EQ(deck.output.every, 10);
@@ -411,6 +413,7 @@ TEST(TEST_CATEGORY, deck_defaults_fill_what_a_minimal_deck_leaves_out) {
   EXPECT_EQ(implicitSettings.preconditioner, deck::Preconditioner::Auto);
   EXPECT_EQ(implicitSettings.tangent, deck::Tangent::Auto);
   EXPECT_DOUBLE_EQ(implicitSettings.amgReuse, 1.5);
+  EXPECT_EQ(implicitSettings.newton, deck::ImplicitSettings::Newton::Mixed);
   EXPECT_TRUE(implicitDeck.warnings.empty());
 }
 
@@ -595,6 +598,8 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
        {"an unsupported model is singular"}},
       {"unknown tangent", {{"    increments: 10\n", "    increments: 10\n    tangent: skew\n"}}, "solver.tangent",
        {"'skew' is not one of auto, symmetric, exact"}},
+      {"unknown newton format", {{"    increments: 10\n", "    increments: 10\n    newton: modified\n"}},
+       "solver.newton", {"'modified' is not one of mixed, displacement"}},
       {"amg reuse below 1", {{"    increments: 10\n", "    increments: 10\n    amg-reuse: 0.5\n"}}, "solver.amg-reuse",
        {"must be 0 (rebuild the multigrid hierarchy at every Newton iteration) or a growth factor in [1, 100], got 0.5"}},
       {"unknown generator", {{"generator: plate", "generator: disc"}}, "mesh.generator",

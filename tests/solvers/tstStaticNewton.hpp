@@ -192,9 +192,10 @@ TEST(TEST_CATEGORY, static_newton_simply_supported_plate_under_pressure_pd) {
 
 TEST(TEST_CATEGORY, static_newton_cuts_an_increment_too_large_and_recovers) {
   using namespace perishell_test_static_newton;
-  // The whole of Sze 3.1 in one increment, with too few iterations allowed to get there.
+  // The whole of Sze 3.1 in one increment, with too few iterations allowed to get there (the
+  // mixed-format Newton gets there in 8).
   const auto model =
-      stripModel("ccm", 0.5, 10.0, endShear, "increments: 1, max-iterations: 8, max-cuts: 8, tolerance: 1.0e-9");
+      stripModel("ccm", 0.5, 10.0, endShear, "increments: 1, max-iterations: 4, max-cuts: 8, tolerance: 1.0e-9");
   auto solver = perishell::solvers::makeStaticSolver(TEST_EXECSPACE{}, model);
   const auto report = solver.advanceTo(1.0);
   const auto tip = meanDisplacement(solver, model, "right");

@@ -200,6 +200,9 @@ struct ImplicitSettings {
   // those right after a rebuild; 0 rebuilds it every iteration (solvers::NewtonOptions).
   double amgReuse = 1.5;
   bool lineSearch = false;  // solvers::NewtonOptions::lineSearch
+  // Mixed: the shell elements' local forces are Newton unknowns of their own
+  // (solvers::NewtonOptions::mixedFormat); Displacement: the classical Newton.
+  enum class Newton { Mixed, Displacement } newton = Newton::Mixed;
   // Load: the load factor steps 1/increments at a time. ArcLength: the load factor is an
   // unknown of the arc-length method (solvers::StaticNewtonSolver::advanceByArcLength); its
   // first step is 1/increments, and the run ends at load factor 1 or after maxIncrements.

@@ -514,23 +514,68 @@ KOKKOS_INLINE_FUNCTION void deformationalGradientColumn(const ShellReference& re
   for (int k = 0; k < 3; ++k) column[6 * node + 3 + k] = theta[k].derivative;
 }
 
+// d is unchanged when every node translates by the same vector (the frame and the local
+// coordinates are built from differences of positions), so a derivative with respect to node
+// 0's translation is minus the sum of the other nodes' (the element's translational forces
+// balance): B, f and K_S need forward-mode passes for nodes 1..N-1 only, 45 translation pairs
+// of a quad instead of 78. Fills node 0's translation rows and columns of a symmetric matrix
+// whose other entries hold those derivatives.
+template <int N = 4>
+KOKKOS_INLINE_FUNCTION void completeFirstNodeTranslations(double matrix[][6 * N]) {
+  for (int k = 0; k < 3; ++k)
+    for (int m = 3; m < 6 * N; ++m) {
+      double sum = 0.0;
+      for (int a = 1; a < N; ++a) sum += matrix[6 * a + k][m];
+      matrix[k][m] = -sum;
+      matrix[m][k] = -sum;
+    }
+  for (int k = 0; k < 3; ++k)
+    for (int l = 0; l < 3; ++l) {
+      double sum = 0.0;
+      for (int b = 1; b < N; ++b) sum += matrix[k][6 * b + l];
+      matrix[k][l] = -sum;
+    }
+}
+
+// The same for the columns of B (columns[j] = dd/dq_j) of node 0's translations.
+template <int N = 4>
+KOKKOS_INLINE_FUNCTION void completeFirstNodeColumns(double columns[][6 * N]) {
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < 6 * N; ++i) {
+      double sum = 0.0;
+      for (int a = 1; a < N; ++a) sum += columns[6 * a + k][i];
+      columns[k][i] = -sum;
+    }
+}
+
+// Node 0's translational force balances the others' (completeFirstNodeTranslations).
+template <int N = 4>
+KOKKOS_INLINE_FUNCTION void balanceFirstNodeForce(double force[]) {
+  for (int k = 0; k < 3; ++k) {
+    double sum = 0.0;
+    for (int a = 1; a < N; ++a) sum += force[6 * a + k];
+    force[k] = -sum;
+  }
+}
+
 template <int N = 4>
 KOKKOS_INLINE_FUNCTION void addSymmetricPair(double tangent[][6 * N], int j, int k, double value) {
   tangent[j][k] += value;
   if (j != k) tangent[k][j] += value;
 }
 
-// Adds sum_i s_i d2 d_i / dq_j dq_k (paper K_S) for fixed s = K_l d, as the Hessian of the
-// scalar s . d(q), one pair of directions per Dual<Dual> pass (inner derivative: q_j,
-// outer: q_k). Pairs of rotations of different nodes vanish; a rotation pair of one node
-// changes only that node's theta; a translation-rotation pair needs the seeded frame and
-// one theta.
+// Writes sum_i s_i d2 d_i / dq_j dq_k (paper K_S) for fixed s into a zeroed matrix, as the
+// Hessian of the scalar s . d(q), one pair of directions per Dual<Dual> pass (inner
+// derivative: q_j, outer: q_k). Pairs of rotations of different nodes vanish; a rotation pair
+// of one node changes only that node's theta; a translation-rotation pair needs the seeded
+// frame and one theta; node 0's translations follow from the others'.
 template <int N = 4>
-KOKKOS_INLINE_FUNCTION void addInitialStressStiffness(const ShellReference& reference, const double x[][3],
+KOKKOS_INLINE_FUNCTION void initialStressStiffness(const ShellReference& reference, const double x[][3],
                                                       const double rotations[][3][3], const double frame[3][3],
                                                       const double s[], double tangent[][6 * N]) {
   using DD = Dual<Dual<double>>;
-  for (int j = 0; j < 6 * N; ++j) {
+  // Node 0's translations come last, from the others' (completeFirstNodeTranslations).
+  for (int j = 6; j < 6 * N; ++j) {
     if (j % 6 >= 3) continue;
     for (int k = j; k < 6 * N; ++k) {
       if (k % 6 >= 3) continue;
@@ -546,7 +591,7 @@ KOKKOS_INLINE_FUNCTION void addInitialStressStiffness(const ShellReference& refe
       addSymmetricPair<N>(tangent, j, k, sum);
     }
   }
-  for (int j = 0; j < 6 * N; ++j) {
+  for (int j = 6; j < 6 * N; ++j) {
     if (j % 6 >= 3) continue;
     DD seeded[N][3], seededFrame[3][3], centroid[3];
     for (int a = 0; a < N; ++a)
@@ -581,6 +626,7 @@ KOKKOS_INLINE_FUNCTION void addInitialStressStiffness(const ShellReference& refe
         for (int m = 0; m < 3; ++m) sum += s[6 * a + 3 + m] * theta[m].derivative.derivative;
         addSymmetricPair<N>(tangent, 6 * a + 3 + c, 6 * a + 3 + e, sum);
       }
+  completeFirstNodeTranslations<N>(tangent);
 }
 
 // Everything force and tangent share: reference, current frame, d and s = K_l d.
@@ -645,13 +691,14 @@ KOKKOS_INLINE_FUNCTION double shellInternalForce(const double referencePositions
                                                  double force[]) {
   detail::ShellState<N> state;
   detail::evaluateState<N>(referencePositions, positions, rotations, localStiffness, state);
-  for (int j = 0; j < 6 * N; ++j) {
+  for (int j = 3; j < 6 * N; ++j) {
     double column[6 * N];
     detail::deformationalGradientColumn<N>(state.reference, positions, rotations, state.frame, j, column);
     double sum = 0.0;
     for (int i = 0; i < 6 * N; ++i) sum += state.s[i] * column[i];
     force[j] = sum;
   }
+  detail::balanceFirstNodeForce<N>(force);
   return state.energy;
 }
 
@@ -659,20 +706,33 @@ KOKKOS_INLINE_FUNCTION double shellInternalForce(const double referencePositions
 // B^T K_l B + sum_i (K_l d)_i d2 d_i/dq2 (paper K_L + K_S). K_T is the symmetric part of the
 // derivative of f under the multiplicative update R <- exp(dphi) R; addRotationAsymmetry
 // gives that derivative itself. Returns W. N as for shellInternalForce.
+// mixedLocalForces (6 N entries, or null): the mixed-format Newton's independent local forces
+// s (shellLinearizedLocalForces below, docs/implicit.md "Mixed-format Newton") take the place
+// of K_l d in the initial-stress term and in f = B^T s.
 template <int N = 4>
 KOKKOS_INLINE_FUNCTION double shellTangent(const double referencePositions[4][3], const double positions[][3],
                                            const double rotations[][3][3], const double localStiffness[][6 * N],
-                                           double force[], double tangent[][6 * N]) {
+                                           double force[], double tangent[][6 * N],
+                                           const double* mixedLocalForces = nullptr) {
   constexpr int dofs = 6 * N;
   detail::ShellState<N> state;
   detail::evaluateState<N>(referencePositions, positions, rotations, localStiffness, state);
+  if (mixedLocalForces != nullptr)
+    for (int i = 0; i < dofs; ++i) state.s[i] = mixedLocalForces[i];
   double columns[dofs][dofs];  // columns[j] = dd/dq_j
-  for (int j = 0; j < dofs; ++j) {
+  for (int j = 3; j < dofs; ++j)
     detail::deformationalGradientColumn<N>(state.reference, positions, rotations, state.frame, j, columns[j]);
+  detail::completeFirstNodeColumns<N>(columns);
+  for (int j = 3; j < dofs; ++j) {
     double sum = 0.0;
     for (int i = 0; i < dofs; ++i) sum += state.s[i] * columns[j][i];
     force[j] = sum;
   }
+  detail::balanceFirstNodeForce<N>(force);  // as shellInternalForce, to the bit
+  // K_S first: its node-0 translation rows are completed from the others' before K_L joins.
+  for (int j = 0; j < dofs; ++j)
+    for (int k = 0; k < dofs; ++k) tangent[j][k] = 0.0;
+  detail::initialStressStiffness<N>(state.reference, positions, rotations, state.frame, state.s, tangent);
   for (int k = 0; k < dofs; ++k) {
     double stiffnessTimesColumn[dofs];
     for (int r = 0; r < dofs; ++r) {
@@ -683,12 +743,43 @@ KOKKOS_INLINE_FUNCTION double shellTangent(const double referencePositions[4][3]
     for (int j = 0; j <= k; ++j) {
       double sum = 0.0;
       for (int i = 0; i < dofs; ++i) sum += columns[j][i] * stiffnessTimesColumn[i];
-      tangent[j][k] = sum;
-      tangent[k][j] = sum;
+      tangent[j][k] += sum;
+      if (j != k) tangent[k][j] += sum;
     }
   }
-  detail::addInitialStressStiffness<N>(state.reference, positions, rotations, state.frame, state.s, tangent);
   return state.energy;
+}
+
+// The mixed-format Newton's local forces after a correction (Magisano, Leonetti & Garcea,
+// "How to improve efficiency and robustness of the Newton method in geometrically nonlinear
+// structural problem discretized via displacement-based finite elements", CMAME 313 (2017)
+// 986-1005: stresses as independent unknowns, condensed element by element):
+// s = K_l (d(q) + B(q) dq), the local forces linearised along the correction dq (per node:
+// translations, then the spatial rotation increment) from the state q it is applied to. One
+// forward-mode pass gives B dq. N as for shellInternalForce.
+template <int N = 4>
+KOKKOS_INLINE_FUNCTION void shellLinearizedLocalForces(const double referencePositions[4][3],
+                                                       const double positions[][3], const double rotations[][3][3],
+                                                       const double localStiffness[][6 * N], const double correction[],
+                                                       double localForces[]) {
+  using D = Dual<double>;
+  const ShellReference reference = shellReference(referencePositions);
+  D seeded[N][3], rotated[N][3][3];
+  for (int a = 0; a < N; ++a) {
+    D phi[3];
+    for (int k = 0; k < 3; ++k) {
+      seeded[a][k] = D(positions[a][k], correction[6 * a + k]);
+      phi[k] = D(0.0, correction[6 * a + 3 + k]);
+    }
+    rotation::rotateBySpatialIncrementToSecondOrder(phi, rotations[a], rotated[a]);
+  }
+  D d[6 * N];
+  detail::deformationalDofs<N>(reference, seeded, rotated, d);
+  for (int r = 0; r < 6 * N; ++r) {
+    double sum = 0.0;
+    for (int c = 0; c < 6 * N; ++c) sum += localStiffness[r][c] * (d[c].value + d[c].derivative);
+    localForces[r] = sum;
+  }
 }
 
 // Turns the symmetric K_T into the exact derivative of f under R_a <- exp(dphi_a) R_a

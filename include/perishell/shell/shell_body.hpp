@@ -69,6 +69,11 @@ constexpr ElementForceAssembly defaultElementForceAssembly() {
              : ElementForceAssembly::Scatter;
 }
 
+// Per MITC element, 24 local forces s (a triangle's first 18): the mixed-format Newton's
+// independent unknowns (shellLinearizedLocalForces).
+template <class MemorySpaceT>
+using ElementLocalForcesView = Kokkos::View<double* [24], Kokkos::LayoutRight, MemorySpaceT>;
+
 namespace detail {
 
 template <class MemorySpaceT>
@@ -105,18 +110,39 @@ KOKKOS_INLINE_FUNCTION void subtractElementForce(const ShellBody<MemorySpaceT>& 
   }
 }
 
-// Adds the tangent of MITC element e (N as above) into the CRS values.
+// Adds the tangent of MITC element e (N as above) into the CRS values; with the mixed-format
+// Newton's local forces where mixedLocalForces has rows (shellTangent).
 template <int N, class MemorySpaceT, class PatternT>
 KOKKOS_INLINE_FUNCTION void addElementTangent(const ShellBody<MemorySpaceT>& body, LocalIndex e,
                                               const double reference[4][3], const double current[4][3],
                                               const double rotations[4][3][3], const PatternT& pattern,
-                                              const VectorView<MemorySpaceT>& values, TangentForm form) {
-  double localStiffness[6 * N][6 * N], force[6 * N], tangent[6 * N][6 * N];
+                                              const VectorView<MemorySpaceT>& values, TangentForm form,
+                                              const ElementLocalForcesView<MemorySpaceT>& mixedLocalForces) {
+  double localStiffness[6 * N][6 * N], force[6 * N], tangent[6 * N][6 * N], mixed[6 * N];
   for (int r = 0; r < 6 * N; ++r)
     for (int c = 0; c < 6 * N; ++c) localStiffness[r][c] = body.localStiffness(e, r, c);
-  shellTangent<N>(reference, current, rotations, localStiffness, force, tangent);
+  const bool useMixed = mixedLocalForces.extent(0) > 0;
+  if (useMixed)
+    for (int i = 0; i < 6 * N; ++i) mixed[i] = mixedLocalForces(e, i);
+  shellTangent<N>(reference, current, rotations, localStiffness, force, tangent, useMixed ? mixed : nullptr);
   if (form == TangentForm::Exact) addRotationAsymmetry<N>(force, tangent);
   pattern.template atomicAddElementMatrix<N>(e, tangent, values);
+}
+
+// Writes element e's mixed-format local forces after the correction eta dq (N as above).
+template <int N, class MemorySpaceT>
+KOKKOS_INLINE_FUNCTION void linearizeElementLocalForces(const ShellBody<MemorySpaceT>& body, LocalIndex e,
+                                                        const double reference[4][3], const double current[4][3],
+                                                        const double rotations[4][3][3],
+                                                        const pd::NodalVectorView<MemorySpaceT>& correction, double eta,
+                                                        const ElementLocalForcesView<MemorySpaceT>& localForces) {
+  double localStiffness[6 * N][6 * N], step[6 * N], forces[6 * N];
+  for (int r = 0; r < 6 * N; ++r)
+    for (int c = 0; c < 6 * N; ++c) localStiffness[r][c] = body.localStiffness(e, r, c);
+  for (int a = 0; a < N; ++a)
+    for (int d = 0; d < 6; ++d) step[6 * a + d] = eta * correction(body.quads(e, a), d);
+  shellLinearizedLocalForces<N>(reference, current, rotations, localStiffness, step, forces);
+  for (int i = 0; i < 6 * N; ++i) localForces(e, i) = forces[i];
 }
 
 }  // namespace detail
@@ -344,11 +370,13 @@ void addShellNodalStiffness(const ExecutionSpaceT& space, const ShellBody<Memory
 }
 
 // Adds every element's symmetric tangent K_T (the one CG solves with) into the CRS values;
-// the pattern's element e is body element e.
+// the pattern's element e is body element e. mixedLocalForces: empty, or one row per element
+// (the mixed-format Newton's s, in place of K_l d).
 template <class ExecutionSpaceT, class MemorySpaceT, class PatternT>
 void assembleShellTangent(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
                           const pd::PdKinematics<MemorySpaceT>& state, const PatternT& pattern,
-                          const VectorView<MemorySpaceT>& values, TangentForm form = TangentForm::Symmetric) {
+                          const VectorView<MemorySpaceT>& values, TangentForm form = TangentForm::Symmetric,
+                          const ElementLocalForcesView<MemorySpaceT>& mixedLocalForces = {}) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   if (body.kind != ShellElementKind::Mitc4)
     throw std::logic_error("assembleShellTangent: the one-point shell element has no tangent; build MITC4 elements");
@@ -358,9 +386,30 @@ void assembleShellTangent(const ExecutionSpaceT& space, const ShellBody<MemorySp
         double reference[4][3], current[4][3], rotations[4][3][3];
         detail::loadElement(body, state, e, reference, current, rotations);
         if (mesh::isTriangle(body.quads, e))
-          detail::addElementTangent<3>(body, e, reference, current, rotations, pattern, values, form);
+          detail::addElementTangent<3>(body, e, reference, current, rotations, pattern, values, form, mixedLocalForces);
         else
-          detail::addElementTangent<4>(body, e, reference, current, rotations, pattern, values, form);
+          detail::addElementTangent<4>(body, e, reference, current, rotations, pattern, values, form, mixedLocalForces);
+      });
+}
+
+// The mixed-format Newton's local forces of every element after the correction eta dq from
+// the current state: s = K_l (d + eta B dq) (shellLinearizedLocalForces). dq per node:
+// translations, then the spatial rotation increment. Call before the correction is applied.
+template <class ExecutionSpaceT, class MemorySpaceT>
+void linearizeShellLocalForces(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
+                               const pd::PdKinematics<MemorySpaceT>& state,
+                               const pd::NodalVectorView<MemorySpaceT>& correction, double eta,
+                               const ElementLocalForcesView<MemorySpaceT>& localForces) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  Kokkos::parallel_for(
+      "perishell::shell::linearizeShellLocalForces", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numElements()),
+      KOKKOS_LAMBDA(const LocalIndex e) {
+        double reference[4][3], current[4][3], rotations[4][3][3];
+        detail::loadElement(body, state, e, reference, current, rotations);
+        if (mesh::isTriangle(body.quads, e))
+          detail::linearizeElementLocalForces<3>(body, e, reference, current, rotations, correction, eta, localForces);
+        else
+          detail::linearizeElementLocalForces<4>(body, e, reference, current, rotations, correction, eta, localForces);
       });
 }
 

@@ -132,6 +132,7 @@ void StaticNewtonSolver<ExecutionSpaceT>::restoreFrom(const io::Checkpoint& chec
       "the deck's model is not the one the checkpoint's run solved (another mesh, zones or horizon)";
   takeView(checkpoint, "implicit.displacements", state_.displacements, mismatch);
   takeView(checkpoint, "implicit.rotations", state_.rotations, mismatch);
+  ++stateVersion_;
   const auto& factors = checkpoint.reals("implicit.factors");
   const auto& flags = checkpoint.integers("implicit.flags");
   if (factors.size() != 5 || flags.size() != 4)
@@ -186,6 +187,7 @@ belos::CgOptions StaticNewtonSolver<ExecutionSpaceT>::linearOptions(double toler
 
 template <class ExecutionSpaceT>
 void StaticNewtonSolver<ExecutionSpaceT>::factorConvergedTangent(IncrementReport& report) {
+  mixedForcesCurrent_ = false;  // the converged state's own tangent
   // The elimination's right-hand side is scratch here.
   const Matrix K = constrainedTangent(flatCorrection(), report);
   try {
@@ -649,30 +651,43 @@ void StaticNewtonSolver<ExecutionSpaceT>::updateCurrentPositions() {
 
 template <class ExecutionSpaceT>
 void StaticNewtonSolver<ExecutionSpaceT>::assembleTangent() {
+  // Where nothing moved since the last assembly (an increment's first iteration after the
+  // converged tangent was factored), values_ still hold it: its elimination is idempotent.
+  if (tangentVersion_ == stateVersion_ && !mixedForcesCurrent_ && !tangentUsedMixedForces_) return;
+  tangentVersion_ = stateVersion_;
+  tangentUsedMixedForces_ = mixedForcesCurrent_;
   Kokkos::deep_copy(space_, values_, 0.0);
-  if (shell_) shell::assembleShellTangent(space_, *shell_, state_, pattern_, values_, options_.tangent);
+  if (shell_)
+    shell::assembleShellTangent(space_, *shell_, state_, pattern_, values_, options_.tangent,
+                                mixedForcesCurrent_ ? mixedForces_ : shell::ElementLocalForcesView<Memory>());
   if (pd_)
     pd::assembleBondTangent(space_, *pd_, state_, intact_, pattern_, values_, options_.tangent, actions_.mirrorImages);
 }
 
 template <class ExecutionSpaceT>
 void StaticNewtonSolver<ExecutionSpaceT>::applyPrescribedValues(double loadFactor) {
+  mixedForcesCurrent_ = false;  // the supports' move is no Newton correction
   CurveFactors factors = actions_.supportFactors(loadFactor);
   const auto constrained = actions_.constrainedDofs;
   const auto value = actions_.prescribedValue;
   const auto curve = actions_.supportCurveIndex;
   const auto u = state_.displacements;
   const auto q = state_.rotations;
-  Kokkos::parallel_for(
+  int changed = 0;
+  Kokkos::parallel_reduce(
       "perishell::newton::applyPrescribedValues", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes_),
-      KOKKOS_LAMBDA(const LocalIndex node) {
+      KOKKOS_LAMBDA(const LocalIndex node, int& count) {
         const unsigned mask = constrained(node);
         if (mask == 0) return;
         auto target = [&](int d) {
           return value(node, d) * (curve(node, d) < 0 ? loadFactor : factors.values[curve(node, d)]);
         };
         for (int d = 0; d < 3; ++d)
-          if (mask & (1u << d)) u(node, d) = target(d);
+          if (mask & (1u << d)) {
+            const double prescribed = target(d);
+            count += u(node, d) != prescribed;
+            u(node, d) = prescribed;
+          }
         if ((mask >> 3) == 0) return;
         const double quaternion[4] = {q(node, 0), q(node, 1), q(node, 2), q(node, 3)};
         double R[3][3], theta[3], updated[4];
@@ -681,14 +696,26 @@ void StaticNewtonSolver<ExecutionSpaceT>::applyPrescribedValues(double loadFacto
         for (int d = 0; d < 3; ++d)
           if (mask & (1u << (3 + d))) theta[d] = target(3 + d);
         rotation::exponential(theta, updated);
-        for (int k = 0; k < 4; ++k) q(node, k) = updated[k];
-      });
+        for (int k = 0; k < 4; ++k) {
+          count += q(node, k) != updated[k];
+          q(node, k) = updated[k];
+        }
+      },
+      changed);
+  if (changed > 0) ++stateVersion_;
   prescribedFactor_ = loadFactor;
   assembly::imposeMirrorImages(space_, actions_.mirrorImages, u, q, actions_.prescribedAt(loadFactor, loadFactor));
 }
 
 template <class ExecutionSpaceT>
 void StaticNewtonSolver<ExecutionSpaceT>::applyCorrection(double eta) {
+  if (options_.mixedFormat && shell_ && shell_->numElements() > 0) {
+    if (mixedForces_.extent(0) == 0)
+      mixedForces_ = shell::ElementLocalForcesView<Memory>("perishell::newton::mixedForces", shell_->numElements());
+    shell::linearizeShellLocalForces(space_, *shell_, state_, correction_, eta, mixedForces_);
+    mixedForcesCurrent_ = true;
+  }
+  ++stateVersion_;
   const auto du = correction_;
   const auto u = state_.displacements;
   const auto q = state_.rotations;

@@ -42,6 +42,7 @@ StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& spac
   options.tolerance = settings.tolerance;
   options.maxCuts = settings.maxCuts;
   options.lineSearch = settings.lineSearch;
+  options.mixedFormat = settings.newton == deck::ImplicitSettings::Newton::Mixed;
   options.arcLengthFirstStep = 1.0 / settings.increments;
   options.amgReuseGrowth = settings.amgReuse;
   options.preconditioner = settings.preconditioner;
