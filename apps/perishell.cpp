@@ -5,9 +5,11 @@
 #include <perishell/core/stop_request.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/model.hpp>
+#include <perishell/parallel/communicator.hpp>
 #include <perishell/solvers/explicit/explicit_run.hpp>
 #include <perishell/solvers/history_columns.hpp>
 #include <perishell/solvers/implicit/implicit_run.hpp>
+#include <perishell/solvers/local_model.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -24,6 +26,10 @@
 #include <vector>
 
 namespace {
+
+// Set while a distributed run's solver runs: an error there may be one rank's alone, and the
+// others would wait for it in a collective (main ends them all).
+bool inDistributedSolver = false;
 
 constexpr const char* usage = R"(usage: perishell [--help] [--version] [--backend-info]
        perishell run DECK.yaml [--output DIR] [--backend device|host] [--max-steps N]
@@ -60,7 +66,13 @@ Commands:
                   elements, PD ratio, bonds, DOF counts. Exit 1 with the deck key and the
                   reason when the deck is invalid. With --output DIR, also writes
                   DIR/model.xmf (+ .h5) for ParaView: the mesh with the node fields
-                  pd-node (1 on PD nodes) and bonds (bonds per node).
+                  pd-node (1 on PD nodes) and bonds (bonds per node). Under mpirun, also
+                  the partition: owned and halo nodes, elements and bonds per rank.
+
+Distributed runs (a build with PERISHELL_ENABLE_MPI, docs/parallel.md):
+  mpirun -np N perishell run DECK   runs an explicit deck on N ranks (one per GPU in a
+                  CUDA build), each holding its part of the model; the files and the
+                  printed summary are those of a one-rank run, bit for bit.
   membrane        The stack-verification self-test: a square membrane with fixed edges
                   under uniform tension and pressure, assembled and solved on the build's
                   default device (atomic element assembly, Kokkos Kernels CRS matrix, Belos
@@ -306,6 +318,14 @@ int runCheck(const std::vector<std::string>& args) {
   if (!outputDirectory.empty())
     std::printf("  %-10s %s (pd-node, bonds)\n", "output", writeModelOutput(outputDirectory, model, bonds).c_str());
   for (const auto& warning : deck.warnings) std::printf("  warning: %s\n", warning.c_str());
+  // Under mpirun: how the run would split the model (each rank builds its part).
+  const auto world = perishell::parallel::Communicator::world();
+  if (world.distributed()) {
+    std::fflush(stdout);
+    const auto local = perishell::solvers::makeLocalModel(perishell::ExecutionSpace{}, model, world);
+    perishell::solvers::printPartition(local.partitionRow(), world, std::cout);
+    std::cout.flush();
+  }
   std::printf("deck OK (%.3f s)\n", std::chrono::duration<double>(end - start).count());
   return 0;
 }
@@ -324,6 +344,8 @@ int runDeck(const std::vector<std::string>& args) {
   printMeshNotes(model);
   std::fflush(stdout);
   perishell::installStopRequestHandlers();
+  const bool isExplicit = deck.solver.type == perishell::deck::SolverType::Explicit;
+  inDistributedSolver = isExplicit && perishell::parallel::Communicator::world().distributed();
   const int stoppedBy = deck.solver.type == perishell::deck::SolverType::Explicit
                             ? perishell::solvers::runExplicit(model, parsed.run, std::cout).stoppedBySignal
                             : perishell::solvers::runImplicit(model, parsed.run, std::cout).stoppedBySignal;
@@ -398,6 +420,12 @@ int runMembrane(const std::vector<std::string>& args) {
 }  // namespace
 
 int main(int argc, char* argv[]) {
+  // Before Kokkos, and finalised after it: a run under mpirun is distributed (docs/parallel.md).
+  const perishell::parallel::Environment mpi(argc, argv);
+  const auto world = perishell::parallel::Communicator::world();
+  // One progress stream and one summary: the root's. Errors stay on every rank's stderr.
+  if (!world.root() && !std::freopen("/dev/null", "w", stdout))
+    std::fprintf(stderr, "perishell (rank %d): cannot silence stdout\n", world.rank());
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty() || args[0] == "--help" || args[0] == "-h") {
     std::fputs(usage, args.empty() ? stderr : stdout);
@@ -427,10 +455,19 @@ int main(int argc, char* argv[]) {
     if (args[0] == "membrane") return runMembrane({args.begin() + 1, args.end()});
     throw UsageError("unknown command '" + args[0] + "'");
   } catch (const UsageError& error) {
-    std::fprintf(stderr, "perishell: error: %s\n(see perishell --help)\n", error.what());
+    if (world.root()) std::fprintf(stderr, "perishell: error: %s\n(see perishell --help)\n", error.what());
     return 2;
   } catch (const std::exception& error) {
-    std::fprintf(stderr, "perishell: error: %s\n", error.what());
+    // Errors before the solver are the deck's and the same on every rank: the root says it.
+    // In the solver, each rank says its own and all end at once.
+    if (world.root())
+      std::fprintf(stderr, "perishell: error: %s\n", error.what());
+    else if (inDistributedSolver)
+      std::fprintf(stderr, "perishell (rank %d of %d): error: %s\n", world.rank(), world.size(), error.what());
+    if (inDistributedSolver) {
+      std::fflush(stderr);
+      world.abort(1);
+    }
     return 1;
   }
 }

@@ -15,6 +15,18 @@ if(NOT CHOLMOD_INCLUDE_DIR OR NOT CHOLMOD_LIBRARY)
                       "CHOLMOD_INCLUDE_DIR and CHOLMOD_LIBRARY")
 endif()
 
+# Distributed runs (docs/parallel.md): MPI for the ranks, METIS for the partition.
+if(PERISHELL_ENABLE_MPI)
+  find_package(MPI REQUIRED COMPONENTS C)
+  find_path(METIS_INCLUDE_DIR metis.h)
+  find_library(METIS_LIBRARY metis)
+  if(NOT METIS_INCLUDE_DIR OR NOT METIS_LIBRARY)
+    message(FATAL_ERROR "perishell: METIS not found (metis.h: ${METIS_INCLUDE_DIR}, library: ${METIS_LIBRARY}); "
+                        "install it: apt-get install libmetis-dev, or set METIS_INCLUDE_DIR and METIS_LIBRARY")
+  endif()
+  find_program(PERISHELL_MPIEXEC NAMES mpirun mpiexec HINTS ${MPI_C_COMPILER_DIR})
+endif()
+
 if(PERISHELL_BACKEND STREQUAL "cuda")
   kokkos_check(DEVICES CUDA)
 else()

@@ -6,7 +6,9 @@
 # a warm cache rebuilds nothing. Why this route: ../shared/docs/deps.md.
 #
 # Usage: cmake/deps/bootstrap.sh [--backend openmp|cuda] [--cache DIR] [--jobs N]
-#                                [--prefix-file FILE] [--no-apt] [--patches DIR]
+#                                [--prefix-file FILE] [--no-apt] [--patches DIR] [--with-mpi]
+#   --with-mpi: also Debian's Open MPI and METIS, for the openmp-mpi / cuda-mpi presets
+#               (docs/parallel.md); nothing in the cache depends on them
 #   --patches DIR: apply the patches in DIR instead of cmake/patches (they enter the cache key)
 # Environment: PERISHELL_CACHE (cache root, default $HOME/.cache/perishell),
 #              PERISHELL_TRILINOS_TARBALL (use this trilinos_13.2.0.orig.tar.gz, skip the download),
@@ -25,6 +27,7 @@ readonly DEBIAN_PACKAGES=(cmake ninja-build g++ make patch ca-certificates dpkg-
                           libblas-dev liblapack-dev libsuitesparse-dev  # CHOLMOD (solvers/direct)
                           libopenblas0-serial  # CHOLMOD's BLAS: 1.9x faster factorizations (docs/implicit.md)
                           python3-numpy python3-matplotlib python3-h5py)  # perf/charts
+readonly MPI_PACKAGES=(libopenmpi-dev openmpi-bin libmetis-dev)  # --with-mpi (docs/parallel.md)
 
 script_dir=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 patch_dir="$script_dir/../patches"
@@ -34,6 +37,7 @@ cache=${PERISHELL_CACHE:-$HOME/.cache/perishell}
 jobs=$(nproc 2>/dev/null || echo 2)
 prefix_file=""
 use_apt=1
+packages=("${DEBIAN_PACKAGES[@]}")
 
 say() { printf 'perishell-deps: %s\n' "$*" >&2; }
 die() {
@@ -49,8 +53,9 @@ while [ $# -gt 0 ]; do
     --jobs) jobs=${2:?--jobs needs a value}; shift 2 ;;
     --prefix-file) prefix_file=${2:?--prefix-file needs a value}; shift 2 ;;
     --no-apt) use_apt=0; shift ;;
+    --with-mpi) packages+=("${MPI_PACKAGES[@]}"); shift ;;
     --patches) patch_dir=${2:?--patches needs a value}; shift 2 ;;
-    -h|--help) sed -n '2,14p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,16p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) die "unknown argument '$1'" "run with --help for the usage" ;;
   esac
 done
@@ -63,7 +68,7 @@ cache=$(cd "$cache" && pwd)
 # ---------------------------------------------------------------- Debian packages
 install_debian_packages() {
   local missing=() pkg
-  for pkg in "${DEBIAN_PACKAGES[@]}"; do
+  for pkg in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
   done
   [ ${#missing[@]} -eq 0 ] && return 0

@@ -4,9 +4,11 @@
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/nodal_loads.hpp>
 #include <perishell/coupling/adaptive_zone.hpp>
+#include <perishell/parallel/gather_nodes.hpp>
 #include <perishell/solvers/explicit/central_difference.hpp>
 #include <perishell/solvers/explicit/explicit_run.hpp>
 #include <perishell/solvers/history_columns.hpp>
+#include <perishell/solvers/local_model.hpp>
 #include <perishell/solvers/model_actions.hpp>
 #include <perishell/solvers/run_checkpoint.hpp>
 #include <perishell/solvers/state_check.hpp>
@@ -29,8 +31,21 @@ using HostVector3 = Kokkos::View<double* [3], Kokkos::LayoutRight, Kokkos::HostS
 // A node is on the crack when it has lost this share of its neighbour volume (docs/deck.md).
 constexpr double crackDamage = 0.4;
 
-void requireRunnableModel(const model::Model& model) {
+void requireRunnableModel(const model::Model& model, const RunOptions& options,
+                          const parallel::Communicator& communicator) {
   const auto& deck = model.deck;
+  if (communicator.distributed()) {
+    const std::string ranks = " in a run on " + std::to_string(communicator.size()) + " ranks";
+    if (deck.zones.adaptive)
+      throw std::invalid_argument(deck.sourceName + ": zones.adaptive: an adaptive PD zone is not supported" + ranks +
+                                  " yet; run it on one rank, or set the PD zone in the deck");
+    if (deck.output.checkpoints())
+      throw std::invalid_argument(deck.sourceName + ": output.checkpoint-every: checkpoints are not written" + ranks +
+                                  " yet; leave the key out or run on one rank");
+    if (!options.restartDirectory.empty())
+      throw std::invalid_argument("--restart: a run on " + std::to_string(communicator.size()) +
+                                  " ranks cannot continue a checkpoint yet; restart on one rank");
+  }
   for (const auto& load : deck.loads)
     if (load.follower)
       throw std::invalid_argument(deck.sourceName + ": loads." + load.name +
@@ -56,14 +71,17 @@ class RunOutput {
  public:
   using Solver = CentralDifferenceSolver<ExecutionSpaceT>;
   // restart: continue the outputs of the run that wrote it (solvers/run_checkpoint.hpp).
+  // Every rank makes one and calls it alike (its fields are gathered to the root, which
+  // alone writes); directory is the root's.
   RunOutput(const model::Model& model, const std::string& directory, const Solver& solver,
-            const HistoryColumns& shared, const io::Checkpoint* restart)
+            const HistoryColumns& shared, const io::Checkpoint* restart, const parallel::NodeGather& gather)
       : model_(model),
         solver_(solver),
         shared_(shared),
-        writer_(createdDirectory(directory), "results", model.outputMesh()),
-        damage_("pd damage", model.shell.mesh.numNodes()),
+        gather_(gather),
+        damage_("pd damage", solver.kinematics().displacements.extent(0)),
         zoneNodes_(model.pdNodes) {
+    if (gather.root()) writer_.emplace(createdDirectory(directory), "results", model.outputMesh());
     const auto& deck = model.deck;
     std::vector<std::string> columns = {"step", "time"};
     for (const auto& load : deck.loads)
@@ -83,7 +101,7 @@ class RunOutput {
         case deck::HistoryQuantity::Reactions:
           add(shared.reactionColumns());
           // The loads on prescribed DOFs go straight into the supports (host copies of the patterns).
-          hostActions_ = makeExternalActions<Kokkos::HostSpace>(model);
+          if (gather.root()) hostActions_ = makeExternalActions<Kokkos::HostSpace>(model);
           break;
         case deck::HistoryQuantity::BrokenBonds: columns.push_back("broken-bonds"); break;
         case deck::HistoryQuantity::CrackTip:
@@ -94,9 +112,10 @@ class RunOutput {
       }
     }
     add(shared.probeColumns());
+    if (!gather.root()) return;
     if (restart) {
       auto position = takeOutputPosition(*restart);
-      writer_.continueSeries(std::move(position.fieldSteps));
+      writer_->continueSeries(std::move(position.fieldSteps));
       history_.emplace(directory + "/history.csv", columns, position.historyRows);
       const auto& tip = restart->reals("output.crack-tip");
       if (tip.size() != 7) throw io::CheckpointError(restart->context() + "'output.crack-tip' is not of this version");
@@ -112,35 +131,38 @@ class RunOutput {
     }
   }
 
-  std::string xdmfPath() const { return writer_.xdmfPath(); }
+  std::string xdmfPath() const { return writer_ ? writer_->xdmfPath() : std::string(); }
   // How far the outputs have got, and the crack tip's last row, for a checkpoint.
   void saveTo(io::Checkpoint& checkpoint) const {
-    putOutputPosition(checkpoint, {history_->numRows(), writer_.steps()});
+    putOutputPosition(checkpoint, {history_->numRows(), writer_->steps()});
     const CrackTip tip = crackTip_.value_or(CrackTip{});
     checkpoint.putReals("output.crack-tip", {lastTipTime_, lastTipDistance_, crackTip_ ? 1.0 : 0.0, tip.position[0],
                                              tip.position[1], tip.position[2], tip.length});
   }
   // The nodes of PD elements, for the zone field (the adaptive zone grows them).
   void setZoneNodes(const Kokkos::View<LocalIndex*, Kokkos::HostSpace>& nodes) { zoneNodes_ = nodes; }
-  std::string historyPath() const { return history_->path(); }
+  std::string historyPath() const { return history_ ? history_->path() : std::string(); }
   // The crack tip of the last history row, when the history tracks it (deck: history: crack-tip).
   std::optional<CrackTip> crackTip() const { return crackTip_; }
 
+  // Collective.
   void writeFields() {
     const auto& deck = model_.deck;
-    const LocalIndex numNodes = model_.shell.mesh.numNodes();
+    const bool root = writer_.has_value();
     std::vector<io::NodalField> fields;
     for (const auto field : deck.output.fields) {
       switch (field) {
         case deck::OutputField::Displacement:
           fields.push_back({"displacement", 3, hostDisplacements()});
           break;
-        case deck::OutputField::Rotation:
-          fields.push_back(io::makeRotationVectorField(
-              "rotation", Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().rotations)));
+        case deck::OutputField::Rotation: {
+          const auto rotations = gather_.gather(solver_.kinematics().rotations);
+          if (root) fields.push_back(io::makeRotationVectorField("rotation", rotations));
           break;
+        }
         case deck::OutputField::Velocity: {
-          const auto velocities = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.velocities());
+          const auto velocities = gather_.gather(solver_.velocities());
+          const LocalIndex numNodes = static_cast<LocalIndex>(velocities.extent(0));
           HostVector3 translational("velocity", numNodes);
           for (LocalIndex node = 0; node < numNodes; ++node)
             for (int d = 0; d < 3; ++d) translational(node, d) = velocities(node, d);
@@ -151,19 +173,23 @@ class RunOutput {
           fields.push_back(io::makeScalarField("damage", hostDamage()));
           break;
         case deck::OutputField::Zone: {
-          Kokkos::View<int*, Kokkos::HostSpace> zone("zone", numNodes);
+          if (!root) break;
+          Kokkos::View<int*, Kokkos::HostSpace> zone("zone", model_.shell.mesh.numNodes());
           for (std::size_t k = 0; k < zoneNodes_.extent(0); ++k) zone(zoneNodes_(k)) = 1;
           fields.push_back(io::makeScalarField("zone", zone));
           break;
         }
       }
     }
+    if (!root) return;
     for (auto& field : fields) field = io::firstNodes(field, model_.numMeshNodes());
-    writer_.writeStep(solver_.time(), fields);
+    writer_->writeStep(solver_.time(), fields);
   }
 
-  // energy: the row's state's (Solver::checkState(), which also leaves its forces for the reactions).
+  // energy: the row's state's (Solver::checkState(), which also leaves its forces for the
+  // reactions). Collective: the root computes and writes the row from gathered fields.
   void appendHistory(Solver& solver, const EnergyReport& energy) {
+    const bool root = history_.has_value();
     const auto& deck = model_.deck;
     std::vector<double> row = {double(solver.stepIndex()), solver.time()};
     for (const auto& curve : curves_) row.push_back(deck::evaluateCurve(*deck.findCurve(curve), solver.time()));
@@ -180,30 +206,37 @@ class RunOutput {
                      {e.kinetic, e.strain, e.fracture, e.damping, e.externalWork, e.supportWork, e.balanceError()});
           break;
         }
-        case deck::HistoryQuantity::Reactions: shared_.appendReactions(outOfBalance(), row); break;
+        case deck::HistoryQuantity::Reactions: {
+          const auto sum = outOfBalance();
+          if (root) shared_.appendReactions(sum, row);
+          break;
+        }
         case deck::HistoryQuantity::BrokenBonds: row.push_back(double(solver.brokenBonds())); break;
         case deck::HistoryQuantity::CrackTip: appendCrackTip(solver.time(), row); break;
-        case deck::HistoryQuantity::LoadPoints: shared_.appendLoadPoints(currentDisplacements(), row); break;
+        case deck::HistoryQuantity::LoadPoints: {
+          const auto u = currentDisplacements();
+          if (root) shared_.appendLoadPoints(u, row);
+          break;
+        }
       }
     }
-    if (!shared_.probes().empty())
-      shared_.appendProbes(currentDisplacements(),
-                           Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.kinematics().rotations),
-                           row);
-    history_->append(row);
+    if (!shared_.probes().empty()) {
+      const auto u = currentDisplacements();
+      const auto rotations = gather_.gather(solver.kinematics().rotations);
+      if (root) shared_.appendProbes(u, rotations, row);
+    }
+    if (root) history_->append(row);
   }
 
  private:
-  HostVector3 hostDisplacements() const {
-    return Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().displacements);
-  }
+  HostVector3 hostDisplacements() const { return gather_.gather(solver_.kinematics().displacements); }
 
   // P + the bond and element forces at every node DOF at the row's time, the forces being those
   // of the last evaluation (energies() takes the row's state): what the supports balance where
   // they prescribe a DOF (the inertia of prescribed nodes left out).
   model::HostNodalValues outOfBalance() const {
-    model::HostNodalValues sum("out of balance", model_.shell.mesh.numNodes());
-    Kokkos::deep_copy(sum, solver_.forces());
+    const model::HostNodalValues sum = gather_.gather(solver_.forces());
+    if (sum.extent(0) == 0) return sum;
     const auto factors = hostActions_.loadFactors(solver_.time());
     for (std::size_t node = 0; node < sum.extent(0); ++node)
       for (int p = 0; p < hostActions_.numPatterns(); ++p)
@@ -213,7 +246,7 @@ class RunOutput {
 
   Kokkos::View<double*, Kokkos::HostSpace> hostDamage() {
     solver_.computeDamage(damage_);
-    return Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, damage_);
+    return gather_.gather(damage_);
   }
 
 
@@ -221,6 +254,7 @@ class RunOutput {
   // that distance between rows (the tip speed while the crack runs away from its origin).
   void appendCrackTip(double time, std::vector<double>& row) {
     const auto damage = hostDamage();
+    if (!history_) return;
     const auto& x = model_.shell.mesh.coordinates;
     double farthest = 0.0;
     double tip[3] = {crackOrigin_[0], crackOrigin_[1], crackOrigin_[2]};
@@ -243,8 +277,9 @@ class RunOutput {
   const model::Model& model_;
   const Solver& solver_;
   const HistoryColumns& shared_;
+  const parallel::NodeGather& gather_;
   ExternalActions<Kokkos::HostSpace> hostActions_;  // with reactions only
-  io::XdmfTimeSeriesWriter writer_;
+  std::optional<io::XdmfTimeSeriesWriter> writer_;  // the root's
   std::optional<io::CsvHistory> history_;
   VectorView<typename ExecutionSpaceT::memory_space> damage_;
   Kokkos::View<LocalIndex*, Kokkos::HostSpace> zoneNodes_;
@@ -264,12 +299,13 @@ Kokkos::View<std::uint8_t*, Kokkos::HostSpace> checkpointZone(const io::Checkpoi
 
 // Stops the run on a non-finite, runaway or blown-up state (docs/reliability.md), naming the
 // step, the quantity and the deck's likely cause; the files hold the steps before.
-template <class Solver>
-void requireHealthyState(const model::Model& model, const Solver& solver, const typename Solver::StateCheck& check,
-                         long long step, double time) {
-  const auto extent = displacementExtent(
-      model, Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.kinematics().displacements));
-  if (check.healthy() && !extent.blownUp()) return;
+// Empty when the state is healthy.
+template <class Solver, class DisplacementsT>
+std::string unhealthyStateMessage(const model::Model& model, const Solver& solver,
+                                  const typename Solver::StateCheck& check, long long step, double time,
+                                  const DisplacementsT& displacements) {
+  const auto extent = displacementExtent(model, displacements);
+  if (check.healthy() && !extent.blownUp()) return {};
   std::ostringstream message;
   message.precision(4);
   message << "explicit solver: unstable at step " << step << " (t = " << time << " s): ";
@@ -281,19 +317,57 @@ void requireHealthyState(const model::Model& model, const Solver& solver, const 
   message << extent.describe();
   message << ". Likely cause: " << explicitBlowUpCause(model.deck, solver.timeStep(), solver.criticalTimeStep())
           << ". This state was not written; the result files hold the steps before it.";
-  throw ExplicitInstability(message.str());
+  return message.str();
+}
+
+// Collective: the root judges the gathered displacements and every rank throws its verdict.
+template <class Solver>
+void requireHealthyState(const model::Model& model, const Solver& solver, const typename Solver::StateCheck& check,
+                         long long step, double time, const parallel::NodeGather& gather) {
+  const auto displacements = gather.gather(solver.kinematics().displacements);
+  const auto& communicator = solver.distribution().communicator();
+  const std::string verdict =
+      communicator.broadcast(gather.root() ? unhealthyStateMessage(model, solver, check, step, time, displacements)
+                                           : std::string());
+  if (!verdict.empty()) throw ExplicitInstability(verdict);
+}
+
+std::string ranksText(const parallel::Communicator& communicator) {
+  return communicator.distributed() ? " x " + std::to_string(communicator.size()) + " MPI ranks" : std::string();
+}
+
+// The model's bonds: on many ranks, each counted on the rank owning its first node. Collective.
+template <class Solver, class LocalModelT>
+long long bondCount(const Solver& solver, const std::optional<LocalModelT>& local) {
+  if (!local) return static_cast<long long>(solver.body().bonds.numBonds());
+  return solver.distribution().communicator().sum(local->partitionRow().bonds);
+}
+
+// The shell elements: on many ranks, each counted on the rank owning its first node. Collective.
+template <class Solver, class LocalModelT>
+long long elementCount(const parallel::Communicator& communicator, const Solver& solver,
+                       const std::optional<LocalModelT>& local) {
+  if (!local) return solver.numElements();
+  const auto& domain = local->domain;
+  long long owned = 0;
+  for (const LocalIndex e : local->bodies.ccmElements) owned += domain.owned[domain.mesh.quads(e, 0)];
+  return communicator.sum(owned);
 }
 
 template <class ExecutionSpaceT>
 ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Model& model, const RunOptions& runOptions,
                                  std::ostream& log) {
-  requireRunnableModel(model);
+  using MemorySpace = typename ExecutionSpaceT::memory_space;
+  const auto communicator = parallel::Communicator::world();
+  requireRunnableModel(model, runOptions, communicator);
   using Clock = std::chrono::steady_clock;
   const auto& deck = model.deck;
-  // Before the set-up: a directory another run holds is refused at once.
-  const RunDirectory runDirectory(model, runOptions, "explicit", log);
-  const std::string& directory = runDirectory.path();
-  const auto& checkpoint = runDirectory.checkpoint();
+  // Before the set-up: a directory another run holds is refused at once. The root writes.
+  std::optional<RunDirectory> runDirectory;
+  if (communicator.root()) runDirectory.emplace(model, runOptions, "explicit", log);
+  const std::string directory = runDirectory ? runDirectory->path() : std::string();
+  const std::optional<io::Checkpoint> noCheckpoint;
+  const auto& checkpoint = runDirectory ? runDirectory->checkpoint() : noCheckpoint;
   const auto& settings = deck.solver.explicitSettings;
   const auto setupStart = Clock::now();
   // Before the solver's set-up, so that a probe off the shell stops the run at once.
@@ -305,7 +379,10 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   if (deck.zones.adaptive)
     adaptive.emplace(space, model.shell.mesh, checkpoint ? checkpointZone(*checkpoint, model) : model.elementIsPd,
                      coupling::couplingInputs(model), deck.zones.adaptive->strainFraction);
-  const auto bodies = adaptive ? adaptive->bodies() : coupling::makeCoupledBodies(space, model);
+  // A distributed run builds this rank's part only (solvers/local_model.hpp).
+  std::optional<LocalModel<ExecutionSpaceT>> local;
+  if (communicator.distributed()) local.emplace(makeLocalModel(space, model, communicator));
+  const auto bodies = local ? local->bodies : adaptive ? adaptive->bodies() : coupling::makeCoupledBodies(space, model);
   const auto& body = bodies.pdBody;
   // The support layer's elements are PD from the start; the counts are the deck's mesh's.
   const LocalIndex layerElements = model.shell.mesh.numElements() - model.numMeshElements();
@@ -318,19 +395,22 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   options.forceKernel = deck.peridynamics.forceKernel;
   options.monitorEvery = std::min<long long>(100, deck.output.historyEvery);
   options.timePhases = runOptions.timePhases;
-  CentralDifferenceSolver<ExecutionSpaceT> solver(space, body, bodies.shellElements(),
-                                                  makeExternalActions<typename ExecutionSpaceT::memory_space>(model),
-                                                  options);
+  CentralDifferenceSolver<ExecutionSpaceT> solver(
+      space, body, bodies.shellElements(), local ? local->actions : makeExternalActions<MemorySpace>(model), options,
+      local ? local->distribution : parallel::NodeDistribution<MemorySpace>());
+  const parallel::NodeGather gather(local ? &local->domain : nullptr, communicator, model.shell.mesh.numNodes());
   if (checkpoint) solver.restoreFrom(*checkpoint);
   const long long deckSteps =
       settings.steps ? *settings.steps
                      : std::max(1LL, static_cast<long long>(std::ceil(*settings.endTime / solver.timeStep() - 1e-9)));
   const long long totalSteps = std::min(deckSteps, runOptions.maxSteps.value_or(deckSteps));
   const double setupSeconds = fencedSecondsSince(space, setupStart);
-  log << "explicit: " << bodies.pdNodes.extent(0) << " PD nodes, " << body.bonds.numBonds() << " bonds, "
-      << solver.numElements() << " shell elements ("
+  if (local) printPartition(local->partitionRow(), communicator, log);
+  const long long numBonds = bondCount(solver, local), numElements = elementCount(communicator, solver, local);
+  log << "explicit: " << (local ? model.pdNodes.extent(0) : bodies.pdNodes.extent(0)) << " PD nodes, " << numBonds
+      << " bonds, " << numElements << " shell elements ("
       << (settings.shellElement == deck::ExplicitSettings::ShellElement::OnePoint ? "one-point" : "MITC4") << ") on "
-      << ExecutionSpaceT::name() << "; dt = " << solver.timeStep() << " s (critical estimate "
+      << ExecutionSpaceT::name() << ranksText(communicator) << "; dt = " << solver.timeStep() << " s (critical estimate "
       << solver.criticalTimeStep() << " s), " << totalSteps << " steps to t = " << totalSteps * solver.timeStep()
       << " s; setup " << formatSeconds(setupSeconds) << "\n";
   if (totalSteps < deckSteps)
@@ -353,7 +433,8 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   // The run's wall time starts with the first output, so total = setup + run.
   const auto runStart = Clock::now();
   auto outputStart = runStart;
-  RunOutput<ExecutionSpaceT> output(model, directory, solver, historyColumns, checkpoint ? &*checkpoint : nullptr);
+  RunOutput<ExecutionSpaceT> output(model, directory, solver, historyColumns, checkpoint ? &*checkpoint : nullptr,
+                                    gather);
   if (!checkpoint) {
     output.writeFields();
     output.appendHistory(solver, solver.checkState().energy);
@@ -385,7 +466,7 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
       // The monitor (step() advanced the state, not yet the counter) names solver.dt whether or
       // not the deck sets it: the diagnosis in the deck's terms replaces its message.
       requireHealthyState(model, solver, solver.checkState(), solver.stepIndex() + 1,
-                          solver.time() + solver.timeStep());
+                          solver.time() + solver.timeStep(), gather);
       throw;
     }
     const long long step = solver.stepIndex();
@@ -401,19 +482,21 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
       }
       adaptiveSeconds += fencedSecondsSince(space, checkStart);
     }
-    // A stop request (SIGINT, SIGTERM) ends the run here, with this step written as the last.
+    // A stop request (SIGINT, SIGTERM) ends the run here, with this step written as the last;
+    // on every rank at the same step.
     stoppedBy = stopRequestSignal();
+    if (communicator.distributed()) stoppedBy = static_cast<int>(communicator.max(double(stoppedBy)));
     const bool last = step == totalSteps || stoppedBy != 0;
     const bool historyOnSchedule = step % historyEvery == 0;
     const bool fieldsOnSchedule = fieldEvery > 0 && step % fieldEvery == 0;
     // A checkpoint on its schedule, where the run stops before the deck's end (to be
     // continued), and at the deck's end when the deck asks for checkpoints (to be extended).
-    const bool checkpointDue =
-        checkpointSchedule.due(step) || (last && (step < deckSteps || deck.output.checkpoints()));
+    const bool checkpointDue = !communicator.distributed() && (checkpointSchedule.due(step) ||
+                                                              (last && (step < deckSteps || deck.output.checkpoints())));
     outputStart = Clock::now();
     if (last || historyOnSchedule || fieldsOnSchedule || checkpointDue) {
       const auto check = solver.checkState();
-      requireHealthyState(model, solver, check, step, solver.time());
+      requireHealthyState(model, solver, check, step, solver.time(), gather);
       if (historyOnSchedule) output.appendHistory(solver, check.energy);
       if (fieldsOnSchedule) output.writeFields();
       // Before the last step's extra outputs: a continued run cuts them off and writes its own.
@@ -441,21 +524,24 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   const auto& phase = solver.phaseSeconds();
   const double stepSeconds = summary.wallSeconds - outputSeconds - adaptiveSeconds;
   summary.phases = {{"setup", setupSeconds}, {"steps", stepSeconds}};
-  if (runOptions.timePhases)
+  if (runOptions.timePhases) {
     summary.phases.insert(summary.phases.end(), {{"forces", phase.forces},
                                                  {"integration", phase.integration},
                                                  {"monitor", phase.monitor}});
+    if (communicator.distributed()) summary.phases.emplace_back("exchange", phase.exchange);
+  }
   if (adaptive) summary.phases.emplace_back("adaptive-zone", adaptiveSeconds);
   summary.phases.emplace_back("output", outputSeconds);
   summary.phases.emplace_back("total", setupSeconds + summary.wallSeconds);
-  summary.timingsPath = writePhaseTimes(directory, summary.phases);
+  if (communicator.root()) summary.timingsPath = writePhaseTimes(directory, summary.phases);
 
   const auto energy = solver.energies();
+  if (!communicator.root()) return summary;
   std::ostringstream balance;
   balance.precision(3);
   balance << energy.balanceError();
   io::SummaryTable table("explicit run summary");
-  table.add("backend", ExecutionSpaceT::name())
+  table.add("backend", ExecutionSpaceT::name() + ranksText(communicator))
       .add("steps", std::to_string(summary.steps) +
                         (summary.steps < deckSteps ? " of " + std::to_string(deckSteps) : "") +
                         (stoppedBy != 0 ? std::string(" (stopped by ") + stopSignalName(stoppedBy) + ")" : ""))
@@ -463,14 +549,16 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
       .add("simulated time", formatSeconds(summary.endTime))
       .add("wall time", io::formatDuration(summary.wallSeconds) + " (" +
                             formatSeconds(summary.wallSeconds / double(std::max(1LL, summary.steps))) + " per step)");
-  if (runOptions.timePhases)
+  if (runOptions.timePhases) {
     table.add("  forces", formatSeconds(phase.forces))
         .add("  integration", formatSeconds(phase.integration))
         .add("  energy monitor", formatSeconds(phase.monitor));
+    if (communicator.distributed()) table.add("  halo exchange", formatSeconds(phase.exchange) + " (rank 0)");
+  }
   if (adaptive) table.add("  adaptive zone", formatSeconds(adaptiveSeconds));
   table.add("  output", formatSeconds(outputSeconds))
       .add("setup", formatSeconds(setupSeconds))
-      .add("broken bonds", std::to_string(summary.brokenBonds) + " of " + std::to_string(solver.body().bonds.numBonds()))
+      .add("broken bonds", std::to_string(summary.brokenBonds) + " of " + std::to_string(numBonds))
       .add("energy balance error", balance.str());
   if (summary.crackTip) {
     std::ostringstream tip;

@@ -4,6 +4,7 @@
 #include <perishell/io/progress.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/solvers/history_columns.hpp>
+#include <perishell/parallel/communicator.hpp>
 #include <perishell/solvers/implicit/implicit_run.hpp>
 #include <perishell/solvers/implicit/static_solver_from_model.hpp>
 #include <perishell/solvers/run_checkpoint.hpp>
@@ -425,6 +426,11 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
 }  // namespace
 
 ImplicitRunSummary runImplicit(const model::Model& model, const RunOptions& options, std::ostream& log) {
+  const auto communicator = parallel::Communicator::world();
+  if (communicator.distributed())
+    throw std::invalid_argument(model.deck.sourceName + ": solver.type: the implicit solver runs on one rank (the " +
+                                std::to_string(communicator.size()) +
+                                " ranks of mpirun are for explicit decks, docs/parallel.md); run it without mpirun");
   if constexpr (!std::is_same_v<ExecutionSpace, HostExecutionSpace>)
     if (options.backend == Backend::Host) return runImplicitOn(HostExecutionSpace{}, model, options, log);
   return runImplicitOn(ExecutionSpace{}, model, options, log);

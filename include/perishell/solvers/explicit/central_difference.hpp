@@ -9,13 +9,20 @@
 //
 // The run watches itself every monitorEvery steps: the energy balance
 //   kinetic + strain + fracture + damping = initial energy + work of loads and supports
-// must hold (to the scheme's O(dt^2)). A time step above the stability limit makes the
+// must hold (to the scheme's O(dt^2)).
+//
+// In a distributed run (parallel/node_distribution.hpp) the solver holds one rank's owned
+// nodes and their halo: after every step the halo takes its owners' state, and every sum
+// (energies, broken bonds, the critical step's Lanczos products) runs over owned nodes only,
+// through parallel::reproducibleSum, so that it does not depend on the rank or thread count. A time step above the stability limit makes the
 // highest mode grow by a factor of several per step; its energy then far exceeds the work
 // done on the body, and the run stops with ExplicitInstability instead of producing garbage.
 #include <perishell/core/fenced_seconds.hpp>
 #include <perishell/fracture/carry_broken_bonds.hpp>
 #include <perishell/fracture/damage.hpp>
 #include <perishell/io/checkpoint.hpp>
+#include <perishell/parallel/node_distribution.hpp>
+#include <perishell/parallel/reproducible_sum.hpp>
 #include <perishell/pd/bond_forces.hpp>
 #include <perishell/solvers/explicit/external_actions.hpp>
 #include <perishell/solvers/explicit/nodal_inertia.hpp>
@@ -63,6 +70,7 @@ struct ExplicitPhaseSeconds {
   double forces = 0.0;       // bond and element forces (stress update)
   double integration = 0.0;  // the leapfrog update of every node, supports and loads
   double monitor = 0.0;      // the energy balance check every monitorEvery steps
+  double exchange = 0.0;     // the halo exchange of a distributed run
 };
 
 // Energies at one step [J]; the balance error is
@@ -92,11 +100,14 @@ class CentralDifferenceSolver {
       : CentralDifferenceSolver(space, std::move(body), std::nullopt, std::move(actions), options) {}
 
   // A mixed model: the PD body indexed by mesh node (pd::indexByMeshNodes; it may have no
-  // bonds) and the shell elements (coupling/make_coupled_model.hpp builds both).
+  // bonds) and the shell elements (coupling/make_coupled_model.hpp builds both). In a
+  // distributed run, the bodies and actions of this rank's nodes and their distribution.
   CentralDifferenceSolver(const ExecutionSpaceT& space, pd::PdBody<MemorySpace> body,
                           std::optional<shell::ShellBody<MemorySpace>> shellBody, ExternalActions<MemorySpace> actions,
-                          const ExplicitOptions& options)
+                          const ExplicitOptions& options,
+                          parallel::NodeDistribution<MemorySpace> distribution = {})
       : space_(space),
+        distribution_(std::move(distribution)),
         body_(std::move(body)),
         shell_(std::move(shellBody)),
         actions_(std::move(actions)),
@@ -137,6 +148,8 @@ class CentralDifferenceSolver {
     std::swap(intact_, intactNext_);
     advance(monitor);
     timePhase(phaseSeconds_.integration, phaseStart);
+    distribution_.exchange(space_, state_.displacements, state_.rotations, velocities_);
+    timePhase(phaseSeconds_.exchange, phaseStart);
     if (monitor) {
       checkEnergy();
       timePhase(phaseSeconds_.monitor, phaseStart);
@@ -187,6 +200,7 @@ class CentralDifferenceSolver {
   // from the estimate is lowered to safetyFactor x the new estimate when needed; a fixed one
   // above the new critical step throws ExplicitInstability.
   void replaceBodies(pd::PdBody<MemorySpace> body, std::optional<shell::ShellBody<MemorySpace>> shellBody) {
+    requireSingleRank("an adaptive PD zone");
     const double before = energies().stored();
     intact_ = fracture::carryBrokenBonds(space_, body_.bonds, intact_, body.bonds);
     intactNext_ = pd::makeIntactFlags(body.bonds, "intact bonds next");
@@ -216,6 +230,7 @@ class CentralDifferenceSolver {
   // accumulators, and time, step, dt, critical step and initial energy. Everything else
   // (forces, scratch, the monitor's strain and kinetic energy) is recomputed before it is read.
   void saveTo(io::Checkpoint& checkpoint) const {
+    requireSingleRank("a checkpoint");
     putView(checkpoint, "explicit.displacements", state_.displacements);
     putView(checkpoint, "explicit.rotations", state_.rotations);
     putView(checkpoint, "explicit.velocities", velocities_);
@@ -232,6 +247,7 @@ class CentralDifferenceSolver {
   // of the zone the checkpoint recorded) then steps on bit for bit as the saved one would have.
   // Throws io::CheckpointError when the checkpoint's sizes are not this model's.
   void restoreFrom(const io::Checkpoint& checkpoint) {
+    requireSingleRank("a restart");
     const std::string mismatch = "the deck's model is not the one the checkpoint's run solved (another mesh, zones or "
                                  "horizon)";
     takeView(checkpoint, "explicit.displacements", state_.displacements, mismatch);
@@ -267,7 +283,22 @@ class CentralDifferenceSolver {
   const pd::NodalVectorView<MemorySpace>& forces() const { return forces_; }
   const pd::BondFlagView<MemorySpace>& intactBonds() const { return intact_; }
 
-  long long brokenBonds() const { return fracture::countBrokenBonds(space_, intact_); }
+  const parallel::NodeDistribution<MemorySpace>& distribution() const { return distribution_; }
+
+  // Over every rank: a bond counts on the rank that owns its first node.
+  long long brokenBonds() const {
+    if (!distribution_.distributed()) return fracture::countBrokenBonds(space_, intact_);
+    const auto owned = distribution_.owned();
+    const auto halfBonds = body_.bonds.halfBonds;
+    const auto intact = intact_;
+    long long broken = 0;
+    Kokkos::parallel_reduce(
+        "perishell::solvers::CentralDifferenceSolver::brokenOwnedBonds",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, intact.extent(0)),
+        KOKKOS_LAMBDA(const std::size_t b, long long& sum) { sum += !intact(b) && owned(halfBonds(b, 0)) ? 1 : 0; },
+        broken);
+    return distribution_.communicator().sum(broken);
+  }
   void computeDamage(const VectorView<MemorySpace>& damage) const {
     fracture::computeDamage(space_, body_, intact_, damage);
   }
@@ -286,13 +317,16 @@ class CentralDifferenceSolver {
       throw std::invalid_argument("explicit solver: the model has neither PD bonds nor shell elements");
     double smallestVolume = 0.0;
     const auto volumes = body_.volumes;
+    const auto owned = distribution_.owned();
+    const bool everyNode = owned.extent(0) == 0;
     Kokkos::parallel_reduce(
         "perishell::solvers::CentralDifferenceSolver::smallestVolume",
         Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, body_.numNodes()),
         KOKKOS_LAMBDA(const LocalIndex node, double& smallest) {
-          if (!(volumes(node) >= smallest)) smallest = volumes(node);
+          if ((everyNode || owned(node)) && !(volumes(node) >= smallest)) smallest = volumes(node);
         },
         Kokkos::Min<double>(smallestVolume));
+    smallestVolume = distribution_.communicator().min(smallestVolume);
     if (!(smallestVolume > 0.0))
       throw std::invalid_argument("explicit solver: a node has zero (or non-finite) volume");
   }
@@ -430,13 +464,17 @@ class CentralDifferenceSolver {
     report.initial = initialEnergy_;
     const auto displacements = state_.displacements;
     int nonFinite = 0;
+    const auto owned = distribution_.owned();
+    const bool everyNode = owned.extent(0) == 0;
     Kokkos::parallel_reduce(
         "perishell::solvers::CentralDifferenceSolver::countNonFinite",
         Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, body_.numNodes()),
         KOKKOS_LAMBDA(const LocalIndex node, int& count) {
-          for (int k = 0; k < 3; ++k) count += Kokkos::Experimental::isfinite(displacements(node, k)) ? 0 : 1;
+          if (everyNode || owned(node))
+            for (int k = 0; k < 3; ++k) count += Kokkos::Experimental::isfinite(displacements(node, k)) ? 0 : 1;
         },
         nonFinite);
+    nonFinite = distribution_.communicator().any(nonFinite > 0) ? 1 : 0;
     const double sums[7] = {sum(kinetic),      sum(strainEnergy_), sum(fractureEnergy_), sum(externalWork_),
                             sum(supportWork_), sum(dampingWork_),  sum(hourglassEnergy_)};
     report.kinetic = sums[0];
@@ -509,12 +547,16 @@ class CentralDifferenceSolver {
                                VectorView<MemorySpace>("critical step fracture energy", numNodes),
                                pd::makeIntactFlags(body_.bonds, "critical step bonds"), characteristicLength()};
     const auto constrained = actions_.constrainedDofs;
+    const auto globalIds = distribution_.globalIds();
+    const bool localIsGlobal = globalIds.extent(0) == 0;
     Kokkos::parallel_for(
         "perishell::solvers::CentralDifferenceSolver::lanczosStart",
         Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes), KOKKOS_LAMBDA(const LocalIndex node) {
+          const long long meshNode = localIsGlobal ? node : globalIds(node);
           for (int d = 0; d < 6; ++d) {
-            // A fixed pseudo-random start with components along every mode.
-            unsigned hash = 2654435761u * static_cast<unsigned>(6 * node + d + 1);
+            // A fixed pseudo-random start with components along every mode (by mesh node,
+            // so that it is the same on any rank count).
+            unsigned hash = 2654435761u * static_cast<unsigned>(6 * meshNode + d + 1);
             hash ^= hash >> 16;
             hash *= 2246822519u;
             hash ^= hash >> 13;
@@ -574,16 +616,20 @@ class CentralDifferenceSolver {
   void applyScaledStiffness(const pd::NodalVectorView<MemorySpace>& v, const pd::NodalVectorView<MemorySpace>& product,
                             const TrialScratch& scratch) {
     const LocalIndex numNodes = body_.numNodes();
+    distribution_.exchange(space_, v);
     const auto trial = scratch.state;
     const auto constrained = actions_.constrainedDofs;
     const auto mass = inertia_.mass, rotaryInertia = inertia_.rotaryInertia;
     const double amplitude = 1e-7;
     const double horizonLength = scratch.length;
+    const auto owned = distribution_.owned();
+    const bool everyNode = owned.extent(0) == 0;
     double largest = 0.0;
     Kokkos::parallel_reduce(
         "perishell::solvers::CentralDifferenceSolver::trialScale",
         Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes),
         KOKKOS_LAMBDA(const LocalIndex node, double& maximum) {
+          if (!everyNode && !owned(node)) return;
           for (int d = 0; d < 6; ++d) {
             const double physical = Kokkos::Experimental::fabs(v(node, d)) /
                                     Kokkos::Experimental::sqrt(d < 3 ? mass(node) : rotaryInertia(node)) /
@@ -592,6 +638,7 @@ class CentralDifferenceSolver {
           }
         },
         Kokkos::Max<double>(largest));
+    largest = distribution_.communicator().max(largest);
     if (!(largest > 0.0)) throw std::invalid_argument("explicit solver: every DOF is prescribed");
     const double epsilon = amplitude / largest;
     Kokkos::parallel_for(
@@ -641,23 +688,28 @@ class CentralDifferenceSolver {
         });
   }
 
+  // Over the owned nodes of every rank, independent of the order of addition.
   double sum(const VectorView<MemorySpace>& values) const {
-    double total = 0.0;
-    Kokkos::parallel_reduce(
-        "perishell::solvers::CentralDifferenceSolver::sum", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, values.extent(0)),
-        KOKKOS_LAMBDA(const std::size_t i, double& partial) { partial += values(i); }, total);
-    return total;
+    const auto owned = distribution_.owned();
+    const bool everyNode = owned.extent(0) == 0;
+    return parallel::reproducibleSum(
+        space_, values.extent(0),
+        KOKKOS_LAMBDA(const std::size_t i)->double { return everyNode || owned(i) ? values(i) : 0.0; },
+        distribution_.communicator());
   }
 
   double dot(const pd::NodalVectorView<MemorySpace>& a, const pd::NodalVectorView<MemorySpace>& b) const {
-    double total = 0.0;
-    Kokkos::parallel_reduce(
-        "perishell::solvers::CentralDifferenceSolver::dot", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, a.extent(0)),
-        KOKKOS_LAMBDA(const std::size_t node, double& partial) {
-          for (int d = 0; d < 6; ++d) partial += a(node, d) * b(node, d);
+    const auto owned = distribution_.owned();
+    const bool everyNode = owned.extent(0) == 0;
+    return parallel::reproducibleSum(
+        space_, a.extent(0),
+        KOKKOS_LAMBDA(const std::size_t node)->double {
+          double partial = 0.0;
+          if (everyNode || owned(node))
+            for (int d = 0; d < 6; ++d) partial += a(node, d) * b(node, d);
+          return partial;
         },
-        total);
-    return total;
+        distribution_.communicator());
   }
 
   // The longest bond, or without bonds the side of the largest node area: the length trial
@@ -672,6 +724,7 @@ class CentralDifferenceSolver {
           if (volumes(node) > maximum) maximum = volumes(node);
         },
         Kokkos::Max<double>(largestVolume));
+    largestVolume = distribution_.communicator().max(largestVolume);
     return std::max(maxReferenceLength(), std::sqrt(largestVolume / options_.thickness));
   }
 
@@ -685,10 +738,15 @@ class CentralDifferenceSolver {
           if (lengths(b) > maximum) maximum = lengths(b);
         },
         Kokkos::Max<double>(longest));
-    return longest;
+    return distribution_.communicator().max(longest);
   }
 
  private:
+  void requireSingleRank(const char* what) const {
+    if (distribution_.distributed())
+      throw std::logic_error(std::string("explicit solver: ") + what + " is not supported in a distributed run");
+  }
+
   // With timePhases: fences, adds the time since `start` to `total` and restarts `start`.
   void timePhase(double& total, std::chrono::steady_clock::time_point& start) const {
     if (!options_.timePhases) return;
@@ -697,6 +755,7 @@ class CentralDifferenceSolver {
   }
 
   ExecutionSpaceT space_;
+  parallel::NodeDistribution<MemorySpace> distribution_;
   pd::PdBody<MemorySpace> body_;
   std::optional<shell::ShellBody<MemorySpace>> shell_;
   ExternalActions<MemorySpace> actions_;

@@ -1,0 +1,127 @@
+#pragma once
+// How a solver's nodes are shared among ranks (docs/parallel.md): which local nodes this rank
+// owns, their global numbers, and the halo exchange that sets every halo node's state to its
+// owner's. A single-rank run has an empty distribution: every node owned, nothing exchanged.
+//
+// The exchange packs the listed nodal views on the device (one buffer per neighbour, node by
+// node), stages the buffers through host memory and sends them with MPI, then unpacks on the
+// device. Host staging works with any MPI (Debian's Open MPI is not CUDA-aware).
+#include <perishell/core/types.hpp>
+#include <perishell/parallel/communicator.hpp>
+#include <perishell/parallel/domain.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace perishell::parallel {
+
+template <class MemorySpaceT>
+class NodeDistribution {
+ public:
+  NodeDistribution() = default;
+
+  explicit NodeDistribution(const LocalDomain& domain, const Communicator& communicator)
+      : communicator_(communicator), ranks_(domain.ranks) {
+    const auto hostOwned = Kokkos::View<const std::uint8_t*, Kokkos::HostSpace, Kokkos::MemoryUnmanaged>(
+        domain.owned.data(), domain.owned.size());
+    owned_ = Kokkos::View<std::uint8_t*, MemorySpaceT>("owned nodes", domain.owned.size());
+    Kokkos::deep_copy(owned_, hostOwned);
+    Kokkos::View<long long*, Kokkos::HostSpace> hostGlobal("global node ids", domain.nodes.size());
+    for (std::size_t k = 0; k < domain.nodes.size(); ++k) hostGlobal(k) = domain.nodes[k];
+    globalIds_ = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostGlobal);
+    sendNodes_ = flatten(domain.sendNodes, sendOffsets_, "halo send nodes");
+    receiveNodes_ = flatten(domain.receiveNodes, receiveOffsets_, "halo receive nodes");
+  }
+
+  bool distributed() const { return owned_.extent(0) > 0; }
+  const Communicator& communicator() const { return communicator_; }
+  // 1 where this rank owns the node; empty on a single rank (every node owned).
+  const Kokkos::View<std::uint8_t*, MemorySpaceT>& owned() const { return owned_; }
+  // The global (mesh) number of every local node; empty on a single rank (local = global).
+  const Kokkos::View<long long*, MemorySpaceT>& globalIds() const { return globalIds_; }
+  long long haloNodes() const { return static_cast<long long>(receiveNodes_.extent(0)); }
+  long long neighbours() const { return static_cast<long long>(ranks_.size()); }
+  // Bytes this rank sends per exchange of `width` doubles per node.
+  long long sendBytes(int width) const { return 8LL * width * static_cast<long long>(sendNodes_.extent(0)); }
+
+  // Sets every halo node's rows of `views` (each nodes x columns) to the owner's. Collective.
+  template <class ExecutionSpaceT, class... ViewTs>
+  void exchange(const ExecutionSpaceT& space, const ViewTs&... views) {
+    if (!distributed()) return;
+    const int width = (0 + ... + static_cast<int>(views.extent(1)));
+    if (bufferWidth_ < width) {
+      bufferWidth_ = width;
+      sendBuffer_ = Kokkos::View<double*, MemorySpaceT>("halo send buffer", sendNodes_.extent(0) * width);
+      receiveBuffer_ = Kokkos::View<double*, MemorySpaceT>("halo receive buffer", receiveNodes_.extent(0) * width);
+      hostSend_ = Kokkos::create_mirror_view(Kokkos::HostSpace{}, sendBuffer_);
+      hostReceive_ = Kokkos::create_mirror_view(Kokkos::HostSpace{}, receiveBuffer_);
+    }
+    int column = 0;
+    (pack(space, views, column, width), ...);
+    space.fence();
+    Kokkos::deep_copy(hostSend_, sendBuffer_);
+    std::vector<const double*> sends;
+    std::vector<double*> receives;
+    std::vector<int> sendCounts, receiveCounts;
+    for (std::size_t k = 0; k < ranks_.size(); ++k) {
+      sends.push_back(hostSend_.data() + sendOffsets_[k] * width);
+      sendCounts.push_back(static_cast<int>((sendOffsets_[k + 1] - sendOffsets_[k]) * width));
+      receives.push_back(hostReceive_.data() + receiveOffsets_[k] * width);
+      receiveCounts.push_back(static_cast<int>((receiveOffsets_[k + 1] - receiveOffsets_[k]) * width));
+    }
+    communicator_.exchange(ranks_, sends, sendCounts, receives, receiveCounts);
+    Kokkos::deep_copy(receiveBuffer_, hostReceive_);
+    column = 0;
+    (unpack(space, views, column, width), ...);
+  }
+
+  // The steps below launch kernels; public only because nvcc rejects extended lambdas in
+  // private member functions.
+  template <class ExecutionSpaceT, class ViewT>
+  void pack(const ExecutionSpaceT& space, const ViewT& view, int& column, int width) const {
+    const auto nodes = sendNodes_;
+    const auto buffer = sendBuffer_;
+    const int first = column, columns = static_cast<int>(view.extent(1));
+    Kokkos::parallel_for(
+        "perishell::parallel::NodeDistribution::pack", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, nodes.extent(0)),
+        KOKKOS_LAMBDA(const std::size_t k) {
+          for (int c = 0; c < columns; ++c) buffer(k * width + first + c) = view(nodes(k), c);
+        });
+    column += columns;
+  }
+  template <class ExecutionSpaceT, class ViewT>
+  void unpack(const ExecutionSpaceT& space, const ViewT& view, int& column, int width) const {
+    const auto nodes = receiveNodes_;
+    const auto buffer = receiveBuffer_;
+    const int first = column, columns = static_cast<int>(view.extent(1));
+    Kokkos::parallel_for(
+        "perishell::parallel::NodeDistribution::unpack",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, nodes.extent(0)), KOKKOS_LAMBDA(const std::size_t k) {
+          for (int c = 0; c < columns; ++c) view(nodes(k), c) = buffer(k * width + first + c);
+        });
+    column += columns;
+  }
+
+ private:
+  static Kokkos::View<LocalIndex*, MemorySpaceT> flatten(const std::vector<std::vector<LocalIndex>>& lists,
+                                                        std::vector<std::size_t>& offsets, const char* label) {
+    offsets.assign(1, 0);
+    for (const auto& list : lists) offsets.push_back(offsets.back() + list.size());
+    Kokkos::View<LocalIndex*, Kokkos::HostSpace> host(std::string(label), offsets.back());
+    for (std::size_t k = 0; k < lists.size(); ++k)
+      std::copy(lists[k].begin(), lists[k].end(), host.data() + offsets[k]);
+    return Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, host);
+  }
+
+  Communicator communicator_ = Communicator::world();
+  std::vector<int> ranks_;
+  Kokkos::View<std::uint8_t*, MemorySpaceT> owned_;
+  Kokkos::View<long long*, MemorySpaceT> globalIds_;
+  Kokkos::View<LocalIndex*, MemorySpaceT> sendNodes_, receiveNodes_;
+  std::vector<std::size_t> sendOffsets_, receiveOffsets_;
+  int bufferWidth_ = 0;  // doubles per node the buffers hold
+  Kokkos::View<double*, MemorySpaceT> sendBuffer_, receiveBuffer_;
+  typename Kokkos::View<double*, MemorySpaceT>::HostMirror hostSend_, hostReceive_;
+};
+
+}  // namespace perishell::parallel
