@@ -417,6 +417,37 @@ int runMembrane(const std::vector<std::string>& args) {
   return 0;
 }
 
+// The GPUs this process may use: CUDA_VISIBLE_DEVICES' entries where it is set, else the
+// driver's device files /dev/nvidia0, 1, ...
+int visibleGpuCount() {
+  if (const char* visible = std::getenv("CUDA_VISIBLE_DEVICES")) {
+    const std::string list = visible;
+    if (list.empty()) return 0;
+    return 1 + static_cast<int>(std::count(list.begin(), list.end(), ','));
+  }
+  int count = 0;
+  while (std::filesystem::exists("/dev/nvidia" + std::to_string(count))) ++count;
+  return count;
+}
+
+// One rank per GPU (docs/parallel.md): in a CUDA build under mpirun, the rank with node-local
+// index r takes GPU r mod the node's GPUs, unless the command line picks one
+// (--kokkos-device-id, --kokkos-num-devices). Ranks then share GPUs when there are fewer.
+std::vector<std::string> withDeviceOfRank(int argc, char* argv[], const perishell::parallel::Communicator& world) {
+  std::vector<std::string> arguments(argv, argv + argc);
+#ifdef KOKKOS_ENABLE_CUDA
+  const bool chosen = std::any_of(arguments.begin(), arguments.end(), [](const std::string& argument) {
+    return argument.rfind("--kokkos-device-id", 0) == 0 || argument.rfind("--kokkos-num-devices", 0) == 0;
+  });
+  const int gpus = visibleGpuCount();
+  if (world.distributed() && !chosen && gpus > 0)
+    arguments.push_back("--kokkos-device-id=" + std::to_string(world.nodeLocalRank() % gpus));
+#else
+  (void)world;
+#endif
+  return arguments;
+}
+
 }  // namespace
 
 int main(int argc, char* argv[]) {
@@ -439,6 +470,13 @@ int main(int argc, char* argv[]) {
   // Saying so to Kokkos keeps its "OMP_PROC_BIND not set" advice off every run; a value the
   // user set is left alone.
   setenv("OMP_PROC_BIND", "false", /*overwrite=*/0);
+  const auto kokkosArguments = withDeviceOfRank(argc, argv, world);
+  int kokkosArgc = static_cast<int>(kokkosArguments.size());
+  std::vector<char*> kokkosArgv;
+  for (const auto& argument : kokkosArguments) kokkosArgv.push_back(const_cast<char*>(argument.c_str()));
+  kokkosArgv.push_back(nullptr);
+  argv = kokkosArgv.data();
+  argc = kokkosArgc;
   Kokkos::ScopeGuard kokkos(argc, argv);  // strips the --kokkos-* arguments from argv
   args.assign(argv + 1, argv + argc);
   if (args.empty()) {

@@ -17,6 +17,9 @@ done
 # chains), except the driver, glibc and the C++ runtime, which stay the host's.
 for b in "$out"/bin/*; do ldd "$b"; done | awk '$3 ~ /^\// {print $3}' | sort -u |
   grep -vE '/(libc|libm|libdl|libpthread|librt|libresolv|ld-linux-x86-64|libstdc\+\+|libgcc_s|libcuda)\.so' |
+  # An MPI build (cuda-mpi) uses the GPU machine's Open MPI 4.1 and NCCL (same sonames; its
+  # mpirun must start the ranks with its own runtime and transports): never copied.
+  grep -vE '/(libmpi|libopen-(rte|pal)|libnccl|libhwloc|libevent|libpmix|libuc[mpst]|libfabric|libibverbs|librdmacm|libpsm|libnl-|libmunge)[^/]*\.so' |
   while read -r lib; do cp -L "$lib" "$out/lib/"; done
 cp -r "$(dirname "${BASH_SOURCE[0]}")/../tests/data" "$out/data"
 cat > "$out/run-tests.sh" <<'SCRIPT'

@@ -45,6 +45,16 @@ Communicator Communicator::world() {
   return {rank, size};
 }
 
+int Communicator::nodeLocalRank() const {
+  if (size_ == 1) return 0;
+  MPI_Comm node;
+  check(MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &node), "split by node");
+  int local = 0;
+  MPI_Comm_rank(node, &local);
+  MPI_Comm_free(&node);
+  return local;
+}
+
 void Communicator::sum(double* values, int count) const {
   if (size_ > 1) check(MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD), "sum");
 }
@@ -156,6 +166,7 @@ Environment::Environment(int&, char**&) {}
 Environment::~Environment() = default;
 bool mpiEnabled() { return false; }
 Communicator Communicator::world() { return {0, 1}; }
+int Communicator::nodeLocalRank() const { return 0; }
 void Communicator::sum(double*, int) const {}
 void Communicator::sum(long long*, int) const {}
 void Communicator::max(double*, int) const {}

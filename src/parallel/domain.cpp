@@ -73,6 +73,10 @@ std::vector<int> metisParts(const model::Model&, int) {
 
 }  // namespace
 
+double stateReadRadius(const model::Model& model) {
+  return 2.0 * model.horizon() + 2.0 * largestEdge(model.shell.mesh);
+}
+
 double haloRadius(const model::Model& model) {
   const double horizon = model.horizon();
   const double transition =
@@ -127,7 +131,8 @@ LocalDomain makeLocalDomain(const model::Model& model, const std::vector<int>& o
   std::unordered_map<long long, std::vector<LocalIndex>> cells;
   for (LocalIndex node = 0; node < numNodes; ++node)
     cells[key(cellOf(node, 0), cellOf(node, 1), cellOf(node, 2))].push_back(node);
-  std::vector<std::uint8_t> within(local);
+  std::vector<std::uint8_t> within(local), read(local);
+  const double readRadius = stateReadRadius(model);
   for (LocalIndex node = 0; node < numNodes; ++node) {
     if (owner[node] != rank) continue;
     const long long cx = cellOf(node, 0), cy = cellOf(node, 1), cz = cellOf(node, 2);
@@ -137,11 +142,12 @@ LocalDomain makeLocalDomain(const model::Model& model, const std::vector<int>& o
           const auto found = cells.find(key(x, y, z));
           if (found == cells.end()) continue;
           for (const LocalIndex other : found->second) {
-            if (within[other]) continue;
+            if (read[other]) continue;
             double squared = 0.0;
             for (int d = 0; d < 3; ++d)
               squared += std::pow(global.coordinates(other, d) - global.coordinates(node, d), 2);
             if (squared <= radius * radius) within[other] = 1;
+            if (squared <= readRadius * readRadius) read[other] = 1;
           }
         }
   }
@@ -205,7 +211,7 @@ LocalDomain makeLocalDomain(const model::Model& model, const std::vector<int>& o
   // The halo: what each owner sends us; they learn it from our requests.
   std::vector<std::vector<long long>> requests(communicator.size());
   for (LocalIndex k = 0; k < numLocal; ++k)
-    if (!domain.owned[k]) requests[owner[domain.nodes[k]]].push_back(domain.nodes[k]);
+    if (!domain.owned[k] && read[domain.nodes[k]]) requests[owner[domain.nodes[k]]].push_back(domain.nodes[k]);
   const auto asked = communicator.allToAll(requests);
   for (int other = 0; other < communicator.size(); ++other) {
     if (requests[other].empty() && asked[other].empty()) continue;
@@ -225,10 +231,11 @@ LocalDomain makeLocalDomain(const model::Model& model, const std::vector<int>& o
 }
 
 std::vector<PartitionRow> gatherPartitionRows(const PartitionRow& mine, const Communicator& communicator) {
-  const auto all = communicator.gather(
-      std::vector<long long>{mine.ownedNodes, mine.haloNodes, mine.elements, mine.bonds, mine.neighbours});
+  const auto all = communicator.gather(std::vector<long long>{mine.ownedNodes, mine.haloNodes, mine.exchangedNodes,
+                                                              mine.elements, mine.bonds, mine.neighbours});
   std::vector<PartitionRow> rows;
-  for (std::size_t k = 0; k + 4 < all.size(); k += 5) rows.push_back({all[k], all[k + 1], all[k + 2], all[k + 3], all[k + 4]});
+  for (std::size_t k = 0; k + 5 < all.size(); k += 6)
+    rows.push_back({all[k], all[k + 1], all[k + 2], all[k + 3], all[k + 4], all[k + 5]});
   return rows;
 }
 

@@ -28,6 +28,8 @@ class Communicator {
   static Communicator world();
 
   int rank() const { return rank_; }
+  // This rank's index among the ranks on its node (MPI_COMM_TYPE_SHARED): which GPU it takes.
+  int nodeLocalRank() const;
   int size() const { return size_; }
   bool root() const { return rank_ == 0; }
   bool distributed() const { return size_ > 1; }

@@ -9,8 +9,8 @@
 // The halo is every node within haloRadius of an owned node, closed over elements (a halo
 // node has its elements). Its radius covers what an owned node's update reads: bonds (delta),
 // the bond constants of a neighbour (its own neighbourhood, delta more), the morphing field
-// of the transition (its width) and element neighbours. The solver exchanges the state of
-// every halo node after each step, from its owner.
+// of the transition (its width) and element neighbours. After each step the solver sets the
+// state of the halo nodes within stateReadRadius of an owned node to their owners'.
 #include <perishell/mesh/quad_mesh.hpp>
 #include <perishell/mesh/support_layer.hpp>
 #include <perishell/parallel/communicator.hpp>
@@ -32,9 +32,13 @@ namespace perishell::parallel {
 // are more ranks than the model can give nodes to.
 std::vector<int> partitionNodes(const model::Model& model, const Communicator& communicator);
 
-// What an owned node's update reads, at most: 3 delta + the transition width + 2 element sizes
+// What an owned node's set-up reads, at most: 3 delta + the transition width + 2 element sizes
 // (see the header comment).
 double haloRadius(const model::Model& model);
+// Whose state an owned node's step reads, at most: its bonds' and elements' nodes, and for a
+// mirror image's master the image's bonds (2 delta + 2 element sizes). Only these halo nodes
+// are exchanged; the rest of the halo serves the set-up and may drift after it, unread.
+double stateReadRadius(const model::Model& model);
 
 struct LocalDomain {
   std::vector<LocalIndex> nodes;     // the mesh node of every local node, ascending
@@ -44,7 +48,8 @@ struct LocalDomain {
   Kokkos::View<std::uint8_t*, Kokkos::HostSpace> elementIsPd;  // per local element
   mesh::SupportLayer supportLayer;   // renumbered: first layer node and element, mirror images, shares
   // Halo exchange: for neighbour ranks[k], the local nodes whose state it sends us (ascending
-  // global order) and the local nodes we own that it needs.
+  // global order; those within stateReadRadius of an owned node) and the local nodes we own
+  // that it needs.
   std::vector<int> ranks;
   std::vector<std::vector<LocalIndex>> receiveNodes, sendNodes;
 
@@ -57,7 +62,7 @@ LocalDomain makeLocalDomain(const model::Model& model, const std::vector<int>& o
 // One line per rank on the root (empty elsewhere): owned and halo nodes, elements, bonds, and
 // the imbalance of owned work (max over mean). Collective.
 struct PartitionRow {
-  long long ownedNodes = 0, haloNodes = 0, elements = 0, bonds = 0, neighbours = 0;
+  long long ownedNodes = 0, haloNodes = 0, exchangedNodes = 0, elements = 0, bonds = 0, neighbours = 0;
 };
 std::vector<PartitionRow> gatherPartitionRows(const PartitionRow& mine, const Communicator& communicator);
 

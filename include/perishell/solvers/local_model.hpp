@@ -26,6 +26,7 @@ struct LocalModel {
     parallel::PartitionRow row;
     row.ownedNodes = domain.numOwned();
     row.haloNodes = domain.numNodes() - row.ownedNodes;
+    for (const auto& nodes : domain.receiveNodes) row.exchangedNodes += static_cast<long long>(nodes.size());
     row.elements = bodies.shellBody.numElements();
     const auto halfBonds = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, bodies.pdBody.bonds.halfBonds);
     for (std::size_t b = 0; b < halfBonds.extent(0); ++b) row.bonds += domain.owned[halfBonds(b, 0)];
@@ -49,6 +50,10 @@ LocalModel<ExecutionSpaceT> makeLocalModel(const ExecutionSpaceT& space, const m
   return local;
 }
 
+// What the explicit solver's exchange sends per halo node and step: displacement (3),
+// rotation (4) and velocity (6).
+constexpr int haloDoublesPerNode = 13;
+
 // The partition table on the root's log: nodes, halo, elements, bonds and neighbours per rank,
 // and the imbalance of owned bonds + elements (max over mean). Collective.
 inline void printPartition(const parallel::PartitionRow& mine, const parallel::Communicator& communicator,
@@ -56,21 +61,27 @@ inline void printPartition(const parallel::PartitionRow& mine, const parallel::C
   const auto rows = parallel::gatherPartitionRows(mine, communicator);
   if (!communicator.root()) return;
   log << "partition: " << rows.size() << " ranks (METIS on the node graph, weighted by bonds and elements)\n"
-      << "  rank  owned nodes  halo nodes  shell elements        bonds  neighbours\n"
-      << "        (elements: the rank's, halo included; bonds: those whose first node it owns)\n";
+      << "  rank  owned nodes  halo nodes  exchanged  shell elements        bonds  neighbours\n"
+      << "        (halo: for the set-up; exchanged: the halo nodes whose state owned nodes read;\n"
+      << "         elements: the rank's, halo included; bonds: those whose first node it owns)\n";
   double largest = 0.0, total = 0.0;
+  long long exchangedNodes = 0;
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const auto& row = rows[r];
-    log << std::setw(6) << r << std::setw(13) << row.ownedNodes << std::setw(12) << row.haloNodes << std::setw(16)
+    log << std::setw(6) << r << std::setw(13) << row.ownedNodes << std::setw(12) << row.haloNodes << std::setw(11)
+        << row.exchangedNodes << std::setw(16)
         << row.elements << std::setw(13) << row.bonds << std::setw(12) << row.neighbours << "\n";
     const double work = double(row.bonds) + 30.0 * double(row.elements) + double(row.ownedNodes);
     largest = std::max(largest, work);
+    exchangedNodes += row.exchangedNodes;
     total += work;
   }
   std::ostringstream imbalance;
   imbalance.precision(3);
   imbalance << largest / (total / double(rows.size()));
-  log << "  imbalance (max / mean of bonds + 30 x shell elements + nodes): " << imbalance.str() << "\n";
+  log << "  imbalance (max / mean of bonds + 30 x shell elements + nodes): " << imbalance.str() << "\n"
+      << "  halo exchange per step: " << exchangedNodes << " halo nodes x " << haloDoublesPerNode << " doubles = "
+      << exchangedNodes * haloDoublesPerNode * 8 << " bytes sent over all ranks\n";
 }
 
 }  // namespace perishell::solvers
