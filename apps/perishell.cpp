@@ -349,6 +349,15 @@ int runDeck(const std::vector<std::string>& args) {
   const int stoppedBy = deck.solver.type == perishell::deck::SolverType::Explicit
                             ? perishell::solvers::runExplicit(model, parsed.run, std::cout).stoppedBySignal
                             : perishell::solvers::runImplicit(model, parsed.run, std::cout).stoppedBySignal;
+  if (stoppedBy != 0 && inDistributedSolver) {
+    std::cout.flush();
+    if (perishell::parallel::Communicator::world().root())
+      std::fprintf(stderr,
+                   "perishell: stopped by %s before the deck's end; the results hold the states up to the last one "
+                   "in the summary (a distributed run writes no checkpoint yet)\n",
+                   perishell::stopSignalName(stoppedBy));
+    return 128 + stoppedBy;
+  }
   if (stoppedBy != 0) {
     std::cout.flush();
     std::fprintf(stderr,
@@ -448,6 +457,22 @@ std::vector<std::string> withDeviceOfRank(int argc, char* argv[], const perishel
   return arguments;
 }
 
+// Where a node has more ranks than GPUs, ranks share GPUs: allowed (a test can run 2 ranks on
+// one GPU), but slower than one rank per GPU, so the root says so. Collective.
+void warnOfSharedGpus(const perishell::parallel::Communicator& world) {
+#ifdef KOKKOS_ENABLE_CUDA
+  if (!world.distributed()) return;
+  const int gpus = visibleGpuCount();
+  if (world.any(gpus > 0 && world.nodeLocalRank() >= gpus) && world.root())
+    std::fprintf(stderr,
+                 "perishell: warning: more MPI ranks on a node than its %d GPU(s): ranks share GPUs (one rank per "
+                 "GPU is the intended layout, docs/parallel.md)\n",
+                 gpus);
+#else
+  (void)world;
+#endif
+}
+
 }  // namespace
 
 int main(int argc, char* argv[]) {
@@ -478,6 +503,7 @@ int main(int argc, char* argv[]) {
   argv = kokkosArgv.data();
   argc = kokkosArgc;
   Kokkos::ScopeGuard kokkos(argc, argv);  // strips the --kokkos-* arguments from argv
+  warnOfSharedGpus(world);
   args.assign(argv + 1, argv + argc);
   if (args.empty()) {
     std::fputs(usage, stderr);

@@ -493,6 +493,9 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
     // continued), and at the deck's end when the deck asks for checkpoints (to be extended).
     const bool checkpointDue = !communicator.distributed() && (checkpointSchedule.due(step) ||
                                                               (last && (step < deckSteps || deck.output.checkpoints())));
+    if (communicator.distributed() && last && step < deckSteps)
+      log << "explicit: stopping at step " << step << " without a checkpoint: a run on " << communicator.size()
+          << " ranks does not write one yet (docs/parallel.md)\n";
     outputStart = Clock::now();
     if (last || historyOnSchedule || fieldsOnSchedule || checkpointDue) {
       const auto check = solver.checkState();
