@@ -6,12 +6,16 @@
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/model.hpp>
 #include <perishell/parallel/communicator.hpp>
+#include <perishell/solvers/explicit/central_difference.hpp>
 #include <perishell/solvers/explicit/explicit_run.hpp>
 #include <perishell/solvers/history_columns.hpp>
 #include <perishell/solvers/implicit/implicit_run.hpp>
 #include <perishell/solvers/local_model.hpp>
 
 #include <algorithm>
+#ifdef KOKKOS_ENABLE_CUDA
+#include <cuda_runtime_api.h>
+#endif
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -27,9 +31,9 @@
 
 namespace {
 
-// Set while a distributed run's solver runs: an error there may be one rank's alone, and the
-// others would wait for it in a collective (main ends them all).
-bool inDistributedSolver = false;
+// Set where the ranks of a distributed run work on their own parts: an error there may be one
+// rank's alone, and the others would wait for it in a collective (main ends them all).
+bool ranksMayDiverge = false;
 
 constexpr const char* usage = R"(usage: perishell [--help] [--version] [--backend-info]
        perishell run DECK.yaml [--output DIR] [--backend device|host] [--max-steps N]
@@ -288,7 +292,10 @@ int runCheck(const std::vector<std::string>& args) {
   const auto model = perishell::model::buildModel(deck);
   const auto probes = perishell::solvers::snapProbes(model);  // a probe off the shell is a deck error
   const auto bondStart = std::chrono::steady_clock::now();
-  const auto bonds = perishell::model::buildPdBonds(perishell::ExecutionSpace{}, model);
+  const auto world = perishell::parallel::Communicator::world();
+  // Under mpirun the root alone builds the whole bond list and writes (the others' output is silenced).
+  const auto bonds = world.root() ? perishell::model::buildPdBonds(perishell::ExecutionSpace{}, model)
+                                  : perishell::pd::BondList<perishell::MemorySpace>{};
   Kokkos::fence();
   const auto end = std::chrono::steady_clock::now();
 
@@ -315,15 +322,17 @@ int runCheck(const std::vector<std::string>& args) {
   for (const auto& probe : probes)
     std::printf("  %-10s %s: node %d, %g m from the deck's point\n", "probe", probe.name.c_str(),
                 static_cast<int>(probe.node), probe.distance);
-  if (!outputDirectory.empty())
+  if (!outputDirectory.empty() && world.root())
     std::printf("  %-10s %s (pd-node, bonds)\n", "output", writeModelOutput(outputDirectory, model, bonds).c_str());
   for (const auto& warning : deck.warnings) std::printf("  warning: %s\n", warning.c_str());
   // Under mpirun: how the run would split the model (each rank builds its part).
-  const auto world = perishell::parallel::Communicator::world();
   if (world.distributed()) {
     std::fflush(stdout);
+    ranksMayDiverge = true;
     const auto local = perishell::solvers::makeLocalModel(perishell::ExecutionSpace{}, model, world);
-    perishell::solvers::printPartition(local.partitionRow(), world, std::cout);
+    perishell::solvers::printPartition(
+        local.partitionRow(), perishell::solvers::CentralDifferenceSolver<perishell::ExecutionSpace>::haloDoublesPerNode,
+        world, std::cout);
     std::cout.flush();
   }
   std::printf("deck OK (%.3f s)\n", std::chrono::duration<double>(end - start).count());
@@ -345,11 +354,13 @@ int runDeck(const std::vector<std::string>& args) {
   std::fflush(stdout);
   perishell::installStopRequestHandlers();
   const bool isExplicit = deck.solver.type == perishell::deck::SolverType::Explicit;
-  inDistributedSolver = isExplicit && perishell::parallel::Communicator::world().distributed();
+  // Refusals are the same on every rank: before the ranks go their own ways.
+  if (isExplicit) perishell::solvers::requireDistributableExplicitRun(model, parsed.run);
+  ranksMayDiverge = isExplicit && perishell::parallel::Communicator::world().distributed();
   const int stoppedBy = deck.solver.type == perishell::deck::SolverType::Explicit
                             ? perishell::solvers::runExplicit(model, parsed.run, std::cout).stoppedBySignal
                             : perishell::solvers::runImplicit(model, parsed.run, std::cout).stoppedBySignal;
-  if (stoppedBy != 0 && inDistributedSolver) {
+  if (stoppedBy != 0 && ranksMayDiverge) {
     std::cout.flush();
     if (perishell::parallel::Communicator::world().root())
       std::fprintf(stderr,
@@ -426,17 +437,14 @@ int runMembrane(const std::vector<std::string>& args) {
   return 0;
 }
 
-// The GPUs this process may use: CUDA_VISIBLE_DEVICES' entries where it is set, else the
-// driver's device files /dev/nvidia0, 1, ...
+// The GPUs this process may use (none in an OpenMP build). Asked before Kokkos starts.
 int visibleGpuCount() {
-  if (const char* visible = std::getenv("CUDA_VISIBLE_DEVICES")) {
-    const std::string list = visible;
-    if (list.empty()) return 0;
-    return 1 + static_cast<int>(std::count(list.begin(), list.end(), ','));
-  }
+#ifdef KOKKOS_ENABLE_CUDA
   int count = 0;
-  while (std::filesystem::exists("/dev/nvidia" + std::to_string(count))) ++count;
-  return count;
+  return cudaGetDeviceCount(&count) == cudaSuccess ? count : 0;
+#else
+  return 0;
+#endif
 }
 
 // One rank per GPU (docs/parallel.md): in a CUDA build under mpirun, the rank with node-local
@@ -444,33 +452,20 @@ int visibleGpuCount() {
 // (--kokkos-device-id, --kokkos-num-devices). Ranks then share GPUs when there are fewer.
 std::vector<std::string> withDeviceOfRank(int argc, char* argv[], const perishell::parallel::Communicator& world) {
   std::vector<std::string> arguments(argv, argv + argc);
-#ifdef KOKKOS_ENABLE_CUDA
+  if (!world.distributed()) return arguments;
+  const int localRank = world.nodeLocalRank();  // collective: every rank calls it
+  const int gpus = visibleGpuCount();
+  // Where a node has more ranks than GPUs, ranks share GPUs: allowed (a test can run 2 ranks on
+  // one GPU), but slower than one rank per GPU, so the root says so.
+  if (world.any(gpus > 0 && localRank >= gpus) && world.root())
+    std::fprintf(stderr,
+                 "perishell: warning: more MPI ranks on a node than its GPUs: ranks share GPUs (one rank per GPU "
+                 "is the intended layout, docs/parallel.md)\n");
   const bool chosen = std::any_of(arguments.begin(), arguments.end(), [](const std::string& argument) {
     return argument.rfind("--kokkos-device-id", 0) == 0 || argument.rfind("--kokkos-num-devices", 0) == 0;
   });
-  const int gpus = visibleGpuCount();
-  if (world.distributed() && !chosen && gpus > 0)
-    arguments.push_back("--kokkos-device-id=" + std::to_string(world.nodeLocalRank() % gpus));
-#else
-  (void)world;
-#endif
+  if (!chosen && gpus > 0) arguments.push_back("--kokkos-device-id=" + std::to_string(localRank % gpus));
   return arguments;
-}
-
-// Where a node has more ranks than GPUs, ranks share GPUs: allowed (a test can run 2 ranks on
-// one GPU), but slower than one rank per GPU, so the root says so. Collective.
-void warnOfSharedGpus(const perishell::parallel::Communicator& world) {
-#ifdef KOKKOS_ENABLE_CUDA
-  if (!world.distributed()) return;
-  const int gpus = visibleGpuCount();
-  if (world.any(gpus > 0 && world.nodeLocalRank() >= gpus) && world.root())
-    std::fprintf(stderr,
-                 "perishell: warning: more MPI ranks on a node than its %d GPU(s): ranks share GPUs (one rank per "
-                 "GPU is the intended layout, docs/parallel.md)\n",
-                 gpus);
-#else
-  (void)world;
-#endif
 }
 
 }  // namespace
@@ -503,7 +498,6 @@ int main(int argc, char* argv[]) {
   argv = kokkosArgv.data();
   argc = kokkosArgc;
   Kokkos::ScopeGuard kokkos(argc, argv);  // strips the --kokkos-* arguments from argv
-  warnOfSharedGpus(world);
   args.assign(argv + 1, argv + argc);
   if (args.empty()) {
     std::fputs(usage, stderr);
@@ -521,14 +515,18 @@ int main(int argc, char* argv[]) {
   } catch (const UsageError& error) {
     if (world.root()) std::fprintf(stderr, "perishell: error: %s\n(see perishell --help)\n", error.what());
     return 2;
+  } catch (const perishell::solvers::ExplicitInstability& error) {
+    // Judged from global sums and the root's verdict: the same on every rank.
+    if (world.root()) std::fprintf(stderr, "perishell: error: %s\n", error.what());
+    return 1;
   } catch (const std::exception& error) {
     // Errors before the solver are the deck's and the same on every rank: the root says it.
     // In the solver, each rank says its own and all end at once.
     if (world.root())
       std::fprintf(stderr, "perishell: error: %s\n", error.what());
-    else if (inDistributedSolver)
+    else if (ranksMayDiverge)
       std::fprintf(stderr, "perishell (rank %d of %d): error: %s\n", world.rank(), world.size(), error.what());
-    if (inDistributedSolver) {
+    if (ranksMayDiverge) {
       std::fflush(stderr);
       world.abort(1);
     }

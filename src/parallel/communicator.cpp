@@ -1,6 +1,7 @@
 #include <perishell/parallel/communicator.hpp>
 
 #include <cstdlib>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -28,14 +29,14 @@ void check(int code, const char* what) {
 Environment::Environment(int& argc, char**& argv) {
   // Only the main thread calls MPI (Kokkos' threads never do).
   int provided = 0;
-  if (!initialised()) check(MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+  if (initialised()) return;
+  check(MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+  initialisedHere_ = true;
 }
 
 Environment::~Environment() {
-  if (initialised()) MPI_Finalize();
+  if (initialisedHere_ && initialised()) MPI_Finalize();
 }
-
-bool mpiEnabled() { return true; }
 
 Communicator Communicator::world() {
   if (!initialised()) return {0, 1};
@@ -67,6 +68,11 @@ void Communicator::max(double* values, int count) const {
 void Communicator::min(double* values, int count) const {
   if (size_ > 1) check(MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD), "min");
 }
+int Communicator::max(int value) const {
+  if (size_ > 1) check(MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), "max");
+  return value;
+}
+
 bool Communicator::any(bool value) const {
   int flag = value ? 1 : 0;
   if (size_ > 1) check(MPI_Allreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), "any");
@@ -92,34 +98,33 @@ void Communicator::broadcast(std::vector<int>& values) const {
 
 namespace {
 template <class T>
-std::vector<T> gatherOnRoot(const std::vector<T>& values, MPI_Datatype type, int rank, int size, bool everywhere) {
-  int count = static_cast<int>(values.size());
-  std::vector<int> counts(size), offsets(size);
-  check(MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD), "gather counts");
+std::vector<T> gatherOnRoot(const std::vector<T>& values, MPI_Datatype type, int rank, int size) {
+  // Counts as long long, so that every rank sees the same totals and refuses alike.
+  const long long mine = static_cast<long long>(values.size());
+  std::vector<long long> wide(size);
+  check(MPI_Allgather(&mine, 1, MPI_LONG_LONG, wide.data(), 1, MPI_LONG_LONG, MPI_COMM_WORLD), "gather counts");
+  long long sum = 0;
+  for (const long long c : wide) sum += c;
+  if (sum > std::numeric_limits<int>::max())
+    throw std::runtime_error("MPI: a gather of " + std::to_string(sum) + " values passes MPI's int counts");
+  const int count = static_cast<int>(mine);
+  std::vector<int> counts(wide.begin(), wide.end()), offsets(size);
   std::exclusive_scan(counts.begin(), counts.end(), offsets.begin(), 0);
-  const int total = offsets.back() + counts.back();
-  std::vector<T> result(everywhere || rank == 0 ? total : 0);
-  if (everywhere)
-    check(MPI_Allgatherv(values.data(), count, type, result.data(), counts.data(), offsets.data(), type,
-                         MPI_COMM_WORLD), "allgather");
-  else
-    check(MPI_Gatherv(values.data(), count, type, result.data(), counts.data(), offsets.data(), type, 0,
-                      MPI_COMM_WORLD), "gather");
+  const int total = static_cast<int>(sum);
+  std::vector<T> result(rank == 0 ? total : 0);
+  check(MPI_Gatherv(values.data(), count, type, result.data(), counts.data(), offsets.data(), type, 0,
+                    MPI_COMM_WORLD), "gather");
   return result;
 }
 }  // namespace
 
 std::vector<double> Communicator::gather(const std::vector<double>& values) const {
   if (size_ == 1) return values;
-  return gatherOnRoot(values, MPI_DOUBLE, rank_, size_, false);
+  return gatherOnRoot(values, MPI_DOUBLE, rank_, size_);
 }
 std::vector<long long> Communicator::gather(const std::vector<long long>& values) const {
   if (size_ == 1) return values;
-  return gatherOnRoot(values, MPI_LONG_LONG, rank_, size_, false);
-}
-std::vector<long long> Communicator::allGather(const std::vector<long long>& values) const {
-  if (size_ == 1) return values;
-  return gatherOnRoot(values, MPI_LONG_LONG, rank_, size_, true);
+  return gatherOnRoot(values, MPI_LONG_LONG, rank_, size_);
 }
 
 void Communicator::exchange(const std::vector<int>& ranks, const std::vector<const double*>& sends,
@@ -151,10 +156,6 @@ std::vector<std::vector<long long>> Communicator::allToAll(const std::vector<std
   return result;
 }
 
-void Communicator::barrier() const {
-  if (size_ > 1) MPI_Barrier(MPI_COMM_WORLD);
-}
-
 void Communicator::abort(int exitCode) const {
   if (size_ > 1) MPI_Abort(MPI_COMM_WORLD, exitCode);
   std::exit(exitCode);
@@ -164,19 +165,18 @@ void Communicator::abort(int exitCode) const {
 
 Environment::Environment(int&, char**&) {}
 Environment::~Environment() = default;
-bool mpiEnabled() { return false; }
 Communicator Communicator::world() { return {0, 1}; }
 int Communicator::nodeLocalRank() const { return 0; }
 void Communicator::sum(double*, int) const {}
 void Communicator::sum(long long*, int) const {}
 void Communicator::max(double*, int) const {}
 void Communicator::min(double*, int) const {}
+int Communicator::max(int value) const { return value; }
 bool Communicator::any(bool value) const { return value; }
 std::string Communicator::broadcast(const std::string& text) const { return text; }
 void Communicator::broadcast(std::vector<int>&) const {}
 std::vector<double> Communicator::gather(const std::vector<double>& values) const { return values; }
 std::vector<long long> Communicator::gather(const std::vector<long long>& values) const { return values; }
-std::vector<long long> Communicator::allGather(const std::vector<long long>& values) const { return values; }
 void Communicator::exchange(const std::vector<int>& ranks, const std::vector<const double*>&, const std::vector<int>&,
                             const std::vector<double*>&, const std::vector<int>&) const {
   if (!ranks.empty()) throw std::logic_error("Communicator::exchange: a single rank has no neighbours");
@@ -184,7 +184,6 @@ void Communicator::exchange(const std::vector<int>& ranks, const std::vector<con
 std::vector<std::vector<long long>> Communicator::allToAll(const std::vector<std::vector<long long>>& lists) const {
   return lists;
 }
-void Communicator::barrier() const {}
 void Communicator::abort(int exitCode) const { std::exit(exitCode); }
 
 #endif

@@ -31,21 +31,8 @@ using HostVector3 = Kokkos::View<double* [3], Kokkos::LayoutRight, Kokkos::HostS
 // A node is on the crack when it has lost this share of its neighbour volume (docs/deck.md).
 constexpr double crackDamage = 0.4;
 
-void requireRunnableModel(const model::Model& model, const RunOptions& options,
-                          const parallel::Communicator& communicator) {
+void requireRunnableModel(const model::Model& model) {
   const auto& deck = model.deck;
-  if (communicator.distributed()) {
-    const std::string ranks = " in a run on " + std::to_string(communicator.size()) + " ranks";
-    if (deck.zones.adaptive)
-      throw std::invalid_argument(deck.sourceName + ": zones.adaptive: an adaptive PD zone is not supported" + ranks +
-                                  " yet; run it on one rank, or set the PD zone in the deck");
-    if (deck.output.checkpoints())
-      throw std::invalid_argument(deck.sourceName + ": output.checkpoint-every: checkpoints are not written" + ranks +
-                                  " yet; leave the key out or run on one rank");
-    if (!options.restartDirectory.empty())
-      throw std::invalid_argument("--restart: a run on " + std::to_string(communicator.size()) +
-                                  " ranks cannot continue a checkpoint yet; restart on one rank");
-  }
   for (const auto& load : deck.loads)
     if (load.follower)
       throw std::invalid_argument(deck.sourceName + ": loads." + load.name +
@@ -193,10 +180,11 @@ class RunOutput {
     const auto& deck = model_.deck;
     std::vector<double> row = {double(solver.stepIndex()), solver.time()};
     for (const auto& curve : curves_) row.push_back(deck::evaluateCurve(*deck.findCurve(curve), solver.time()));
-    HostVector3 displacements;
+    // Gathered once per row on every rank (the root's copy alone holds rows).
+    std::optional<HostVector3> displacements;
     auto currentDisplacements = [&] {
-      if (displacements.extent(0) == 0) displacements = hostDisplacements();
-      return displacements;
+      if (!displacements) displacements = hostDisplacements();
+      return *displacements;
     };
     for (const auto quantity : deck.output.history) {
       switch (quantity) {
@@ -343,6 +331,16 @@ long long bondCount(const Solver& solver, const std::optional<LocalModelT>& loca
   return solver.distribution().communicator().sum(local->partitionRow().bonds);
 }
 
+// The bond carriers (alpha > 0): on many ranks, each counted on the rank that owns it. Collective.
+template <class BodiesT, class LocalModelT>
+long long bondCarrierCount(const parallel::Communicator& communicator, const BodiesT& bodies,
+                           const std::optional<LocalModelT>& local) {
+  if (!local) return static_cast<long long>(bodies.pdNodes.extent(0));
+  long long owned = 0;
+  for (std::size_t k = 0; k < bodies.pdNodes.extent(0); ++k) owned += local->domain.owned[bodies.pdNodes(k)];
+  return communicator.sum(owned);
+}
+
 // The shell elements: on many ranks, each counted on the rank owning its first node. Collective.
 template <class Solver, class LocalModelT>
 long long elementCount(const parallel::Communicator& communicator, const Solver& solver,
@@ -359,7 +357,8 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
                                  std::ostream& log) {
   using MemorySpace = typename ExecutionSpaceT::memory_space;
   const auto communicator = parallel::Communicator::world();
-  requireRunnableModel(model, runOptions, communicator);
+  requireRunnableModel(model);
+  requireDistributableExplicitRun(model, runOptions);
   using Clock = std::chrono::steady_clock;
   const auto& deck = model.deck;
   // Before the set-up: a directory another run holds is refused at once. The root writes.
@@ -405,9 +404,9 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
                      : std::max(1LL, static_cast<long long>(std::ceil(*settings.endTime / solver.timeStep() - 1e-9)));
   const long long totalSteps = std::min(deckSteps, runOptions.maxSteps.value_or(deckSteps));
   const double setupSeconds = fencedSecondsSince(space, setupStart);
-  if (local) printPartition(local->partitionRow(), communicator, log);
+  if (local) printPartition(local->partitionRow(), solver.haloDoublesPerNode, communicator, log);
   const long long numBonds = bondCount(solver, local), numElements = elementCount(communicator, solver, local);
-  log << "explicit: " << (local ? model.pdNodes.extent(0) : bodies.pdNodes.extent(0)) << " PD nodes, " << numBonds
+  log << "explicit: " << bondCarrierCount(communicator, bodies, local) << " PD nodes, " << numBonds
       << " bonds, " << numElements << " shell elements ("
       << (settings.shellElement == deck::ExplicitSettings::ShellElement::OnePoint ? "one-point" : "MITC4") << ") on "
       << ExecutionSpaceT::name() << ranksText(communicator) << "; dt = " << solver.timeStep() << " s (critical estimate "
@@ -485,7 +484,7 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
     // A stop request (SIGINT, SIGTERM) ends the run here, with this step written as the last;
     // on every rank at the same step.
     stoppedBy = stopRequestSignal();
-    if (communicator.distributed()) stoppedBy = static_cast<int>(communicator.max(double(stoppedBy)));
+    if (communicator.distributed()) stoppedBy = communicator.max(stoppedBy);
     const bool last = step == totalSteps || stoppedBy != 0;
     const bool historyOnSchedule = step % historyEvery == 0;
     const bool fieldsOnSchedule = fieldEvery > 0 && step % fieldEvery == 0;
@@ -587,6 +586,22 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
 }
 
 }  // namespace
+
+void requireDistributableExplicitRun(const model::Model& model, const RunOptions& options) {
+  const auto communicator = parallel::Communicator::world();
+  if (!communicator.distributed()) return;
+  const auto& deck = model.deck;
+  const std::string ranks = " in a run on " + std::to_string(communicator.size()) + " ranks";
+  if (deck.zones.adaptive)
+    throw std::invalid_argument(deck.sourceName + ": zones.adaptive: an adaptive PD zone is not supported" + ranks +
+                                " yet; run it on one rank, or set the PD zone in the deck");
+  if (deck.output.checkpoints())
+    throw std::invalid_argument(deck.sourceName + ": output.checkpoint-every: checkpoints are not written" + ranks +
+                                " yet; leave the key out or run on one rank");
+  if (!options.restartDirectory.empty())
+    throw std::invalid_argument("--restart: a run on " + std::to_string(communicator.size()) +
+                                " ranks cannot continue a checkpoint yet; restart on one rank");
+}
 
 ExplicitRunSummary runExplicit(const model::Model& model, const RunOptions& options, std::ostream& log) {
   if constexpr (!std::is_same_v<ExecutionSpace, HostExecutionSpace>)

@@ -24,7 +24,8 @@ double reproducibleSumOf(const std::vector<double>& terms) {
   std::copy(terms.begin(), terms.end(), host.data());
   const ViewTerm<MemorySpace> term{Kokkos::create_mirror_view_and_copy(MemorySpace{}, host)};
   return perishell::parallel::reproducibleSum(ExecutionSpaceT{}, terms.size(), term,
-                                              perishell::parallel::Communicator::world());
+                                              perishell::parallel::Communicator::self(),
+                                              static_cast<long long>(terms.size()));
 }
 
 // Terms over 30 decades with both signs: plain summation gives a different value per order.

@@ -17,15 +17,17 @@ class Environment {
   ~Environment();
   Environment(const Environment&) = delete;
   Environment& operator=(const Environment&) = delete;
-};
 
-// Whether this build was configured with PERISHELL_ENABLE_MPI.
-bool mpiEnabled();
+ private:
+  bool initialisedHere_ = false;  // finalise only an MPI this object started
+};
 
 class Communicator {
  public:
   // The world: every rank mpirun started (one without MPI, or when MPI is not initialised).
   static Communicator world();
+  // This rank alone: collectives are no-ops (a solver that is not distributed).
+  static Communicator self() { return {0, 1}; }
 
   int rank() const { return rank_; }
   // This rank's index among the ranks on its node (MPI_COMM_TYPE_SHARED): which GPU it takes.
@@ -42,6 +44,7 @@ class Communicator {
   double sum(double value) const { sum(&value, 1); return value; }
   long long sum(long long value) const { sum(&value, 1); return value; }
   double max(double value) const { max(&value, 1); return value; }
+  int max(int value) const;
   double min(double value) const { min(&value, 1); return value; }
   // True on every rank when it is true on any.
   bool any(bool value) const;
@@ -50,11 +53,10 @@ class Communicator {
   std::string broadcast(const std::string& text) const;
   void broadcast(std::vector<int>& values) const;
 
-  // Every rank's `values` concatenated in rank order, on the root (empty elsewhere).
+  // Every rank's `values` concatenated in rank order, on the root (empty elsewhere). Throws
+  // when the total passes MPI's int counts.
   std::vector<double> gather(const std::vector<double>& values) const;
   std::vector<long long> gather(const std::vector<long long>& values) const;
-  // Every rank's `values` concatenated in rank order, on every rank.
-  std::vector<long long> allGather(const std::vector<long long>& values) const;
 
   // Point-to-point exchange with a fixed set of neighbours: sends[k] goes to ranks[k] and
   // receives[k] (sized by the caller) comes from ranks[k]. Non-blocking sends and receives,
@@ -65,7 +67,6 @@ class Communicator {
   // Each rank sends lists[r] to rank r and returns what every rank sent it (index = sender).
   std::vector<std::vector<long long>> allToAll(const std::vector<std::vector<long long>>& lists) const;
 
-  void barrier() const;
   // Ends every rank at once (MPI_Abort): for an error on one rank that the others cannot know
   // of, which would otherwise leave them waiting in a collective.
   [[noreturn]] void abort(int exitCode) const;

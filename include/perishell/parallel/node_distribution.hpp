@@ -30,6 +30,7 @@ class NodeDistribution {
     for (std::size_t k = 0; k < domain.nodes.size(); ++k) hostGlobal(k) = domain.nodes[k];
     globalIds_ = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, hostGlobal);
     sendNodes_ = flatten(domain.sendNodes, sendOffsets_, "halo send nodes");
+    meshNodes_ = communicator.sum(domain.numOwned());
     receiveNodes_ = flatten(domain.receiveNodes, receiveOffsets_, "halo receive nodes");
   }
 
@@ -39,10 +40,11 @@ class NodeDistribution {
   const Kokkos::View<std::uint8_t*, MemorySpaceT>& owned() const { return owned_; }
   // The global (mesh) number of every local node; empty on a single rank (local = global).
   const Kokkos::View<long long*, MemorySpaceT>& globalIds() const { return globalIds_; }
-  long long haloNodes() const { return static_cast<long long>(receiveNodes_.extent(0)); }
-  long long neighbours() const { return static_cast<long long>(ranks_.size()); }
-  // Bytes this rank sends per exchange of `width` doubles per node.
-  long long sendBytes(int width) const { return 8LL * width * static_cast<long long>(sendNodes_.extent(0)); }
+  // The mesh nodes over every rank: how many terms of a sum over owned nodes may be non-zero
+  // (parallel/reproducible_sum.hpp); on a single rank, the local count.
+  long long meshNodes(std::size_t localNodes) const {
+    return distributed() ? meshNodes_ : static_cast<long long>(localNodes);
+  }
 
   // Sets every halo node's rows of `views` (each nodes x columns) to the owner's. Collective.
   template <class ExecutionSpaceT, class... ViewTs>
@@ -113,7 +115,9 @@ class NodeDistribution {
     return Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, host);
   }
 
-  Communicator communicator_ = Communicator::world();
+  // A solver that is not distributed communicates with nobody, even inside an mpirun world.
+  Communicator communicator_ = Communicator::self();
+  long long meshNodes_ = 0;
   std::vector<int> ranks_;
   Kokkos::View<std::uint8_t*, MemorySpaceT> owned_;
   Kokkos::View<long long*, MemorySpaceT> globalIds_;

@@ -2,40 +2,40 @@
 // Sums whose value does not depend on the order of addition: not on the thread count, the
 // backend's reduction tree or how the terms are split over ranks (docs/parallel.md). Each
 // term x is split exactly into x = t1 + t2 + r, t1 a multiple of q1 = 2^(e - 52 + h) and t2 of
-// q2 = q1 2^(h - 52), where 2^e bounds every |x| and 2^h the number of terms: every partial
-// sum of the t1 (and of the t2) is then a multiple of its quantum below 2^53 quanta, so it is
-// exact in any order, and t1 + t2 carries x to about 2^(2h - 104) of the largest term. The
-// split of t1 is Dekker's (x + s) - s with s = 1.5 2^(e + h), exact under IEEE rounding
-// (no -ffast-math: it would fold (x + s) - s into x).
+// q2 = q1 2^(h - 52), where 2^e bounds every |x| and 2^h the number of terms that may be
+// non-zero (a number that must not depend on the rank count, so that neither do the quanta):
+// every partial sum of the t1 (and of the t2) is then a multiple of its quantum below 2^53
+// quanta, so it is exact in any order, and t1 + t2 carries x to about 2^(2h - 104) of the
+// largest term. The split of t1 is Dekker's (x + s) - s with s = 1.5 2^(e + h), exact under
+// IEEE rounding (no -ffast-math: it would fold (x + s) - s into x).
 #include <perishell/core/types.hpp>
 #include <perishell/parallel/communicator.hpp>
 
+#include <algorithm>
 #include <cmath>
-#include <limits>
 
 namespace perishell::parallel {
 
 // The sum over i in [0, count) of term(i) and over every rank (count and term are this rank's).
-// Collective. Non-finite terms give a non-finite sum.
+// At most nonZeroTerms terms over all ranks are non-zero (in a distributed solver: the owned
+// ones; the halo's give 0). Collective. A non-finite term gives a non-finite sum, and so do
+// terms beyond about 2^(1000 - h) (a blown-up state).
 template <class ExecutionSpaceT, class TermT>
 double reproducibleSum(const ExecutionSpaceT& space, std::size_t count, const TermT& term,
-                       const Communicator& communicator) {
+                       const Communicator& communicator, long long nonZeroTerms) {
   double largest = 0.0;
   Kokkos::parallel_reduce(
       "perishell::parallel::reproducibleSum::largest", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, count),
       KOKKOS_LAMBDA(const std::size_t i, double& maximum) {
         const double magnitude = Kokkos::Experimental::fabs(term(i));
-        // NaN compares false: it must still win.
-        if (!(magnitude <= maximum)) maximum = magnitude;
+        if (magnitude > maximum) maximum = magnitude;
       },
       Kokkos::Max<double>(largest));
-  largest = communicator.max(largest);
-  if (!std::isfinite(largest)) return std::numeric_limits<double>::quiet_NaN();
-  if (largest == 0.0) return 0.0;
-  const long long terms = communicator.sum(static_cast<long long>(count));
+  // An empty range gives Max's identity. A NaN term escapes the maximum but not the sums below.
+  largest = std::max(communicator.max(largest), 0.0);
   int e = 0, h = 0;
   std::frexp(largest, &e);  // largest < 2^e
-  std::frexp(static_cast<double>(terms), &h);  // terms < 2^h
+  std::frexp(static_cast<double>(std::max(nonZeroTerms, 1LL)), &h);  // terms < 2^h
   ++h;
   const double split1 = std::ldexp(1.5, e + h), split2 = std::ldexp(1.5, e + 2 * h - 52);
   double sums[2] = {0.0, 0.0};

@@ -21,13 +21,14 @@ struct LocalModel {
   ExternalActions<MemorySpace> actions;
   parallel::NodeDistribution<MemorySpace> distribution;
 
-  // This rank's line of the partition table: half bonds count on the rank owning their first node.
+  // This rank's line of the partition table: bonds and shell elements count on the rank
+  // owning their first node.
   parallel::PartitionRow partitionRow() const {
     parallel::PartitionRow row;
     row.ownedNodes = domain.numOwned();
     row.haloNodes = domain.numNodes() - row.ownedNodes;
     for (const auto& nodes : domain.receiveNodes) row.exchangedNodes += static_cast<long long>(nodes.size());
-    row.elements = bodies.shellBody.numElements();
+    for (const LocalIndex e : bodies.ccmElements) row.elements += domain.owned[domain.mesh.quads(e, 0)];
     const auto halfBonds = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, bodies.pdBody.bonds.halfBonds);
     for (std::size_t b = 0; b < halfBonds.extent(0); ++b) row.bonds += domain.owned[halfBonds(b, 0)];
     row.neighbours = static_cast<long long>(domain.ranks.size());
@@ -50,20 +51,17 @@ LocalModel<ExecutionSpaceT> makeLocalModel(const ExecutionSpaceT& space, const m
   return local;
 }
 
-// What the explicit solver's exchange sends per halo node and step: displacement (3),
-// rotation (4) and velocity (6).
-constexpr int haloDoublesPerNode = 13;
-
 // The partition table on the root's log: nodes, halo, elements, bonds and neighbours per rank,
-// and the imbalance of owned bonds + elements (max over mean). Collective.
-inline void printPartition(const parallel::PartitionRow& mine, const parallel::Communicator& communicator,
+// and the imbalance of owned bonds + elements (max over mean); doublesPerNode: what the
+// solver's exchange sends per halo node. Collective.
+inline void printPartition(const parallel::PartitionRow& mine, int doublesPerNode, const parallel::Communicator& communicator,
                            std::ostream& log) {
   const auto rows = parallel::gatherPartitionRows(mine, communicator);
   if (!communicator.root()) return;
   log << "partition: " << rows.size() << " ranks (METIS on the node graph, weighted by bonds and elements)\n"
       << "  rank  owned nodes  halo nodes  exchanged  shell elements        bonds  neighbours\n"
       << "        (halo: for the set-up; exchanged: the halo nodes whose state owned nodes read;\n"
-      << "         elements: the rank's, halo included; bonds: those whose first node it owns)\n";
+      << "         shell elements and bonds: those whose first node it owns)\n";
   double largest = 0.0, total = 0.0;
   long long exchangedNodes = 0;
   for (std::size_t r = 0; r < rows.size(); ++r) {
@@ -80,8 +78,8 @@ inline void printPartition(const parallel::PartitionRow& mine, const parallel::C
   imbalance.precision(3);
   imbalance << largest / (total / double(rows.size()));
   log << "  imbalance (max / mean of bonds + 30 x shell elements + nodes): " << imbalance.str() << "\n"
-      << "  halo exchange per step: " << exchangedNodes << " halo nodes x " << haloDoublesPerNode << " doubles = "
-      << exchangedNodes * haloDoublesPerNode * 8 << " bytes sent over all ranks\n";
+      << "  halo exchange per step: " << exchangedNodes << " halo nodes x " << doublesPerNode << " doubles = "
+      << exchangedNodes * doublesPerNode * 8 << " bytes sent over all ranks\n";
 }
 
 }  // namespace perishell::solvers

@@ -14,9 +14,11 @@
 // In a distributed run (parallel/node_distribution.hpp) the solver holds one rank's owned
 // nodes and their halo: after every step the halo takes its owners' state, and every sum
 // (energies, broken bonds, the critical step's Lanczos products) runs over owned nodes only,
-// through parallel::reproducibleSum, so that it does not depend on the rank or thread count. A time step above the stability limit makes the
-// highest mode grow by a factor of several per step; its energy then far exceeds the work
-// done on the body, and the run stops with ExplicitInstability instead of producing garbage.
+// through parallel::reproducibleSum, so that it does not depend on the rank or thread count.
+//
+// A time step above the stability limit makes the highest mode grow by a factor of several
+// per step; its energy then far exceeds the work done on the body, and the run stops with
+// ExplicitInstability instead of producing garbage.
 #include <perishell/core/fenced_seconds.hpp>
 #include <perishell/fracture/carry_broken_bonds.hpp>
 #include <perishell/fracture/damage.hpp>
@@ -128,6 +130,8 @@ class CentralDifferenceSolver {
     inertia_ = computeNodalInertia(space_, body_, shell_, options_.density, options_.thickness);
     assembly::weighInertiaByShare(space_, actions_.mirrorImages, inertia_.mass, inertia_.rotaryInertia);
     applyInitialSupportValues();
+    // A halo image whose master lives on another rank takes the owner's initial value.
+    distribution_.exchange(space_, state_.displacements, state_.rotations);
     criticalTimeStep_ = estimateCriticalTimeStep();
     timeStep_ = options_.timeStep > 0.0 ? options_.timeStep : options_.safetyFactor * criticalTimeStep_;
   }
@@ -148,7 +152,7 @@ class CentralDifferenceSolver {
     std::swap(intact_, intactNext_);
     advance(monitor);
     timePhase(phaseSeconds_.integration, phaseStart);
-    distribution_.exchange(space_, state_.displacements, state_.rotations, velocities_);
+    exchangeHalo();
     timePhase(phaseSeconds_.exchange, phaseStart);
     if (monitor) {
       checkEnergy();
@@ -284,6 +288,9 @@ class CentralDifferenceSolver {
   const pd::BondFlagView<MemorySpace>& intactBonds() const { return intact_; }
 
   const parallel::NodeDistribution<MemorySpace>& distribution() const { return distribution_; }
+  // What a step's halo exchange sends per node: displacement, rotation and velocity.
+  static constexpr int haloDoublesPerNode = 3 + 4 + 6;
+  void exchangeHalo() { distribution_.exchange(space_, state_.displacements, state_.rotations, velocities_); }
 
   // Over every rank: a bond counts on the rank that owns its first node.
   long long brokenBonds() const {
@@ -695,7 +702,7 @@ class CentralDifferenceSolver {
     return parallel::reproducibleSum(
         space_, values.extent(0),
         KOKKOS_LAMBDA(const std::size_t i)->double { return everyNode || owned(i) ? values(i) : 0.0; },
-        distribution_.communicator());
+        distribution_.communicator(), distribution_.meshNodes(values.extent(0)));
   }
 
   double dot(const pd::NodalVectorView<MemorySpace>& a, const pd::NodalVectorView<MemorySpace>& b) const {
@@ -709,7 +716,7 @@ class CentralDifferenceSolver {
             for (int d = 0; d < 6; ++d) partial += a(node, d) * b(node, d);
           return partial;
         },
-        distribution_.communicator());
+        distribution_.communicator(), distribution_.meshNodes(a.extent(0)));
   }
 
   // The longest bond, or without bonds the side of the largest node area: the length trial
@@ -724,6 +731,8 @@ class CentralDifferenceSolver {
           if (volumes(node) > maximum) maximum = volumes(node);
         },
         Kokkos::Max<double>(largestVolume));
+    // Over every local node: a halo node's volume (fewer elements than its owner sees) is at
+    // most its owner's, so the maximum is the single-rank one.
     largestVolume = distribution_.communicator().max(largestVolume);
     return std::max(maxReferenceLength(), std::sqrt(largestVolume / options_.thickness));
   }
