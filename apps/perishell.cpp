@@ -11,6 +11,7 @@
 #include <perishell/solvers/history_columns.hpp>
 #include <perishell/solvers/implicit/implicit_run.hpp>
 #include <perishell/solvers/local_model.hpp>
+#include <perishell/solvers/state_check.hpp>
 
 #include <algorithm>
 #ifdef KOKKOS_ENABLE_CUDA
@@ -330,9 +331,12 @@ int runCheck(const std::vector<std::string>& args) {
     std::fflush(stdout);
     ranksMayDiverge = true;
     const auto local = perishell::solvers::makeLocalModel(perishell::ExecutionSpace{}, model, world);
+    const bool isExplicit = deck.solver.type == perishell::deck::SolverType::Explicit;
+    // Explicit: the state each step; implicit: a vector of 6 DOF per node each Krylov iteration.
     perishell::solvers::printPartition(
-        local.partitionRow(), perishell::solvers::CentralDifferenceSolver<perishell::ExecutionSpace>::haloDoublesPerNode,
-        world, std::cout);
+        local.partitionRow(),
+        isExplicit ? perishell::solvers::CentralDifferenceSolver<perishell::ExecutionSpace>::haloDoublesPerNode : 6,
+        world, std::cout, isExplicit ? "step" : "Krylov iteration");
     std::cout.flush();
   }
   std::printf("deck OK (%.3f s)\n", std::chrono::duration<double>(end - start).count());
@@ -356,7 +360,8 @@ int runDeck(const std::vector<std::string>& args) {
   const bool isExplicit = deck.solver.type == perishell::deck::SolverType::Explicit;
   // Refusals are the same on every rank: before the ranks go their own ways.
   if (isExplicit) perishell::solvers::requireDistributableExplicitRun(model, parsed.run);
-  ranksMayDiverge = isExplicit && perishell::parallel::Communicator::world().distributed();
+  if (!isExplicit) perishell::solvers::requireDistributableImplicitRun(model, parsed.run);
+  ranksMayDiverge = perishell::parallel::Communicator::world().distributed();
   const int stoppedBy = deck.solver.type == perishell::deck::SolverType::Explicit
                             ? perishell::solvers::runExplicit(model, parsed.run, std::cout).stoppedBySignal
                             : perishell::solvers::runImplicit(model, parsed.run, std::cout).stoppedBySignal;
@@ -517,6 +522,12 @@ int main(int argc, char* argv[]) {
     return 2;
   } catch (const perishell::solvers::ExplicitInstability& error) {
     // Judged from global sums and the root's verdict: the same on every rank.
+    if (world.root()) std::fprintf(stderr, "perishell: error: %s\n", error.what());
+    return 1;
+  } catch (const perishell::solvers::NewtonFailure& error) {
+    if (world.root()) std::fprintf(stderr, "perishell: error: %s\n", error.what());
+    return 1;
+  } catch (const perishell::solvers::RunStateError& error) {
     if (world.root()) std::fprintf(stderr, "perishell: error: %s\n", error.what());
     return 1;
   } catch (const std::exception& error) {

@@ -595,12 +595,7 @@ void requireDistributableExplicitRun(const model::Model& model, const RunOptions
   if (deck.zones.adaptive)
     throw std::invalid_argument(deck.sourceName + ": zones.adaptive: an adaptive PD zone is not supported" + ranks +
                                 " yet; run it on one rank, or set the PD zone in the deck");
-  if (deck.output.checkpoints())
-    throw std::invalid_argument(deck.sourceName + ": output.checkpoint-every: checkpoints are not written" + ranks +
-                                " yet; leave the key out or run on one rank");
-  if (!options.restartDirectory.empty())
-    throw std::invalid_argument("--restart: a run on " + std::to_string(communicator.size()) +
-                                " ranks cannot continue a checkpoint yet; restart on one rank");
+  requireNoCheckpointsOnRanks(model, options, communicator.size());
 }
 
 ExplicitRunSummary runExplicit(const model::Model& model, const RunOptions& options, std::ostream& log) {

@@ -5,6 +5,7 @@
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/solvers/history_columns.hpp>
 #include <perishell/parallel/communicator.hpp>
+#include <perishell/parallel/gather_nodes.hpp>
 #include <perishell/solvers/implicit/implicit_run.hpp>
 #include <perishell/solvers/implicit/static_solver_from_model.hpp>
 #include <perishell/solvers/run_checkpoint.hpp>
@@ -40,15 +41,18 @@ std::string formatNumber(double value, int precision = 4) {
   return text.str();
 }
 
+// Every rank of a distributed run makes one and calls it alike: the fields are gathered to the
+// root, which alone writes (directory is the root's).
 template <class ExecutionSpaceT>
 class ImplicitOutput {
  public:
   using Solver = StaticNewtonSolver<ExecutionSpaceT>;
   // restart: continue the outputs of the run that wrote it (solvers/run_checkpoint.hpp).
   ImplicitOutput(const model::Model& model, const std::string& directory, const Solver& solver,
-                 const HistoryColumns& shared, const io::Checkpoint* restart)
-      : model_(model), solver_(solver), shared_(shared),
-        writer_((std::filesystem::create_directories(directory), directory), "results", model.outputMesh()) {
+                 const HistoryColumns& shared, const io::Checkpoint* restart, const parallel::NodeGather& gather)
+      : model_(model), solver_(solver), shared_(shared), gather_(gather) {
+    if (!gather.root()) return;
+    writer_.emplace((std::filesystem::create_directories(directory), directory), "results", model.outputMesh());
     std::vector<std::string> columns = {"increment", "load-factor", "newton-iterations", "linear-iterations", "cuts",
                                         "relative-residual", "max-displacement"};
     auto add = [&columns](const std::vector<std::string>& more) {
@@ -61,27 +65,33 @@ class ImplicitOutput {
     add(shared.probeColumns());
     if (restart) {
       auto position = takeOutputPosition(*restart);
-      writer_.continueSeries(std::move(position.fieldSteps));
+      writer_->continueSeries(std::move(position.fieldSteps));
       history_.emplace(directory + "/history.csv", columns, position.historyRows);
     } else {
       history_.emplace(directory + "/history.csv", columns);
     }
   }
 
-  std::string xdmfPath() const { return writer_.xdmfPath(); }
-  OutputPosition position() const { return {history_->numRows(), writer_.steps()}; }
-  std::string historyPath() const { return history_->path(); }
+  // The root's (empty elsewhere).
+  std::string xdmfPath() const { return writer_ ? writer_->xdmfPath() : std::string(); }
+  OutputPosition position() const { return {history_->numRows(), writer_->steps()}; }
+  std::string historyPath() const { return history_ ? history_->path() : std::string(); }
 
+  // Collective.
   void writeFields() {
     const LocalIndex numNodes = model_.shell.mesh.numNodes();
+    const auto& requested = model_.deck.output.fields;
+    const bool wantsDisplacement = std::count(requested.begin(), requested.end(), deck::OutputField::Displacement) > 0;
+    const bool wantsRotation = std::count(requested.begin(), requested.end(), deck::OutputField::Rotation) > 0;
+    const auto u = wantsDisplacement ? displacements() : HostVector3();
+    const auto rotations = wantsRotation ? gather_.gather(solver_.kinematics().rotations)
+                                         : decltype(gather_.gather(solver_.kinematics().rotations))();
+    if (!gather_.root()) return;
     std::vector<io::NodalField> fields;
-    for (const auto field : model_.deck.output.fields) {
+    for (const auto field : requested) {
       switch (field) {
-        case deck::OutputField::Displacement: fields.push_back({"displacement", 3, displacements()}); break;
-        case deck::OutputField::Rotation:
-          fields.push_back(io::makeRotationVectorField(
-              "rotation", Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().rotations)));
-          break;
+        case deck::OutputField::Displacement: fields.push_back({"displacement", 3, u}); break;
+        case deck::OutputField::Rotation: fields.push_back(io::makeRotationVectorField("rotation", rotations)); break;
         case deck::OutputField::Zone: {
           Kokkos::View<int*, Kokkos::HostSpace> zone("zone", numNodes);
           for (std::size_t k = 0; k < model_.pdNodes.extent(0); ++k) zone(model_.pdNodes(k)) = 1;
@@ -95,12 +105,19 @@ class ImplicitOutput {
       }
     }
     for (auto& field : fields) field = io::firstNodes(field, model_.numMeshNodes());
-    writer_.writeStep(solver_.loadFactor(), fields);
+    writer_->writeStep(solver_.loadFactor(), fields);
   }
 
-  // Returns the largest nodal displacement magnitude.
+  // Returns the largest nodal displacement magnitude (on the root; 0 elsewhere). Collective.
   double appendHistory(int increment, const IncrementReport& report) {
     const auto u = displacements();
+    const auto& history = model_.deck.output.history;
+    const bool wantsReactions = std::count(history.begin(), history.end(), deck::HistoryQuantity::Reactions) > 0;
+    const auto outOfBalance = wantsReactions ? gather_.gather(solver_.outOfBalance())
+                                             : decltype(gather_.gather(solver_.outOfBalance()))();
+    const auto rotations = shared_.probes().empty() ? decltype(gather_.gather(solver_.kinematics().rotations))()
+                                                    : gather_.gather(solver_.kinematics().rotations);
+    if (!gather_.root()) return 0.0;
     double maxDisplacement = 0.0;
     for (LocalIndex node = 0; node < model_.numMeshNodes(); ++node)
       maxDisplacement = std::max(maxDisplacement, std::hypot(u(node, 0), u(node, 1), u(node, 2)));
@@ -109,26 +126,22 @@ class ImplicitOutput {
                                maxDisplacement};
     for (const auto quantity : model_.deck.output.history) {
       // The support carries what the out-of-balance force lacks: R = F_int - P = -r.
-      if (quantity == deck::HistoryQuantity::Reactions)
-        shared_.appendReactions(Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.outOfBalance()), row);
+      if (quantity == deck::HistoryQuantity::Reactions) shared_.appendReactions(outOfBalance, row);
       if (quantity == deck::HistoryQuantity::LoadPoints) shared_.appendLoadPoints(u, row);
     }
-    if (!shared_.probes().empty())
-      shared_.appendProbes(u, Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().rotations),
-                           row);
+    if (!shared_.probes().empty()) shared_.appendProbes(u, rotations, row);
     history_->append(row);
     return maxDisplacement;
   }
 
  private:
-  HostVector3 displacements() const {
-    return Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver_.kinematics().displacements);
-  }
+  HostVector3 displacements() const { return gather_.gather(solver_.kinematics().displacements); }
 
   const model::Model& model_;
   const Solver& solver_;
   const HistoryColumns& shared_;
-  io::XdmfTimeSeriesWriter writer_;
+  const parallel::NodeGather& gather_;
+  std::optional<io::XdmfTimeSeriesWriter> writer_;
   std::optional<io::CsvHistory> history_;
 };
 
@@ -155,15 +168,26 @@ std::string incrementState(const IncrementReport& report) {
 
 // Stops the run on a non-finite or blown-up converged state (docs/reliability.md), naming the
 // increment, the quantity and the deck's likely cause; the files hold the increments before.
+// Collective: the root judges the gathered displacements and every rank throws its verdict.
 template <class Solver>
-void requireHealthyState(const model::Model& model, const Solver& solver, int increment, int increments) {
-  const auto extent = displacementExtent(
-      model, Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, solver.kinematics().displacements));
-  if (!extent.blownUp()) return;
-  throw RunStateError("implicit solver: increment " + std::to_string(increment) + " of " + std::to_string(increments) +
-                      " (load factor " + formatNumber(solver.loadFactor(), 6) + "): " + extent.describe() +
-                      ". Likely cause: " + implicitBlowUpCause(model.deck) +
-                      ". This state was not written; the result files hold the increments before it.");
+void requireHealthyState(const model::Model& model, const Solver& solver, int increment, int increments,
+                         const parallel::NodeGather& gather, const parallel::Communicator& communicator) {
+  const auto displacements = gather.gather(solver.kinematics().displacements);
+  std::string verdict;
+  if (gather.root()) {
+    const auto extent = displacementExtent(model, displacements);
+    if (extent.blownUp())
+      verdict = "implicit solver: increment " + std::to_string(increment) + " of " + std::to_string(increments) +
+                " (load factor " + formatNumber(solver.loadFactor(), 6) + "): " + extent.describe() +
+                ". Likely cause: " + implicitBlowUpCause(model.deck) +
+                ". This state was not written; the result files hold the increments before it.";
+  }
+  verdict = communicator.broadcast(verdict);
+  if (!verdict.empty()) throw RunStateError(verdict);
+}
+
+std::string ranksText(const parallel::Communicator& communicator) {
+  return communicator.distributed() ? " x " + std::to_string(communicator.size()) + " MPI ranks" : std::string();
 }
 
 template <class ExecutionSpaceT>
@@ -171,10 +195,14 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
                                  std::ostream& log) {
   using Clock = std::chrono::steady_clock;
   const auto& deck = model.deck;
-  // Before the set-up: a directory another run holds is refused at once.
-  const RunDirectory runDirectory(model, runOptions, "implicit", log);
-  const std::string& directory = runDirectory.path();
-  const auto& checkpoint = runDirectory.checkpoint();
+  const auto communicator = parallel::Communicator::world();
+  requireDistributableImplicitRun(model, runOptions);
+  // Before the set-up: a directory another run holds is refused at once. The root writes.
+  std::optional<RunDirectory> runDirectory;
+  if (communicator.root()) runDirectory.emplace(model, runOptions, "implicit", log);
+  const std::string directory = runDirectory ? runDirectory->path() : std::string();
+  const std::optional<io::Checkpoint> noCheckpoint;
+  const auto& checkpoint = runDirectory ? runDirectory->checkpoint() : noCheckpoint;
   const auto& settings = deck.solver.implicitSettings;
   const bool arcLength = settings.control == deck::ImplicitSettings::Control::ArcLength;
   // Under arc-length control the run ends at load factor 1; maxIncrements bounds it.
@@ -184,7 +212,11 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   // Before the solver's set-up, so that a probe off the shell stops the run at once.
   const HistoryColumns historyColumns(model);
   printProbes(model, historyColumns.probes(), log);
-  auto solver = makeStaticSolver(space, model);
+  // A distributed run builds this rank's part only (solvers/local_model.hpp).
+  std::optional<LocalModel<ExecutionSpaceT>> local;
+  if (communicator.distributed()) local.emplace(makeLocalModel(space, model, communicator));
+  auto solver = local ? makeStaticSolver(space, model, *local) : makeStaticSolver(space, model);
+  const parallel::NodeGather gather(local ? &local->domain : nullptr, communicator, model.shell.mesh.numNodes());
   if (arcLength) {
     const std::string obstacle = solver.arcLengthObstacle();
     if (!obstacle.empty())
@@ -204,9 +236,15 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   }
   const int firstIncrement = static_cast<int>(counters[0]) + 1;
   const double setupSeconds = fencedSecondsSince(space, setupStart);
-  log << "implicit: " << solver.numElements() << " shell elements, " << solver.numBonds() << " bonds on "
-      << ExecutionSpaceT::name() << "; " << model.freeDofCount() << " free DOF, " << solver.numMatrixEntries()
-      << " tangent entries; "
+  // On many ranks: bonds and shell elements counted on the rank owning their first node, the
+  // tangent's entries of every rank's rows (halo rows included).
+  if (local) printPartition(local->partitionRow(), 6, communicator, log, "Krylov iteration");
+  const auto row = local ? local->partitionRow() : parallel::PartitionRow();
+  const long long numElements = local ? communicator.sum(row.elements) : solver.numElements();
+  const long long numBonds = local ? communicator.sum(row.bonds) : solver.numBonds();
+  log << "implicit: " << numElements << " shell elements, " << numBonds << " bonds on " << ExecutionSpaceT::name()
+      << ranksText(communicator) << "; " << model.freeDofCount() << " free DOF, "
+      << communicator.sum(static_cast<long long>(solver.numMatrixEntries())) << " tangent entries; "
       << (arcLength ? "arc-length control to load factor 1, at most " : "") << deckIncrements
       << " increments; setup " << formatNumber(setupSeconds) << " s\n";
   if (increments < deckIncrements)
@@ -233,7 +271,8 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   // The run's wall time starts with the first output, so total = setup + run.
   const auto runStart = Clock::now();
   auto outputStart = runStart;
-  ImplicitOutput<ExecutionSpaceT> output(model, directory, solver, historyColumns, checkpoint ? &*checkpoint : nullptr);
+  ImplicitOutput<ExecutionSpaceT> output(model, directory, solver, historyColumns, checkpoint ? &*checkpoint : nullptr,
+                                         gather);
   if (!checkpoint) output.writeFields();
   double outputSeconds = fencedSecondsSince(space, outputStart);
   // Every increment prints: static increments are few and each one's iterations matter.
@@ -333,6 +372,7 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
     taken = increment;
     // A stop request (SIGINT, SIGTERM) ends the run after this converged increment, written.
     summary.stoppedBySignal = stopRequestSignal();
+    if (communicator.distributed()) summary.stoppedBySignal = communicator.max(summary.stoppedBySignal);
     const bool deckEnd = increment == deckIncrements || (arcLength && solver.loadFactor() >= 1.0);
     reachedDeckEnd = deckEnd;
     const bool last = increment == increments || deckEnd || summary.stoppedBySignal != 0;
@@ -340,11 +380,14 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
     const bool fieldsOnSchedule = deck.output.every > 0 && increment % deck.output.every == 0;
     // A checkpoint on its schedule, where the run stops before the deck's end (to be
     // continued), and at the deck's end when the deck asks for checkpoints (to be extended).
-    const bool checkpointDue =
-        checkpointSchedule.due(increment) || (last && (!deckEnd || deck.output.checkpoints()));
+    const bool checkpointDue = !communicator.distributed() && (checkpointSchedule.due(increment) ||
+                                                               (last && (!deckEnd || deck.output.checkpoints())));
+    if (communicator.distributed() && last && !deckEnd)
+      log << "implicit: stopping at increment " << increment << " without a checkpoint: a run on "
+          << communicator.size() << " ranks writes none yet (docs/parallel.md)\n";
     outputStart = Clock::now();
     if (last || historyOnSchedule || fieldsOnSchedule || checkpointDue)
-      requireHealthyState(model, solver, increment, deckIncrements);
+      requireHealthyState(model, solver, increment, deckIncrements, gather, communicator);
     if (historyOnSchedule) summary.maxDisplacement = output.appendHistory(increment, report);
     if (fieldsOnSchedule) output.writeFields();
     // Before the last increment's extra outputs: a continued run cuts them off and writes its own.
@@ -372,9 +415,9 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
                     {"update", phases.update},
                     {"output", outputSeconds},
                     {"total", setupSeconds + summary.wallSeconds}};
-  summary.timingsPath = writePhaseTimes(directory, summary.phases);
+  if (communicator.root()) summary.timingsPath = writePhaseTimes(directory, summary.phases);
   io::SummaryTable("implicit run summary")
-      .add("backend", ExecutionSpaceT::name())
+      .add("backend", ExecutionSpaceT::name() + ranksText(communicator))
       .add("increments", std::to_string(taken) +
                              (!arcLength && taken < deckIncrements ? " of " + std::to_string(deckIncrements)
                                                                    : std::string()) +
@@ -425,12 +468,19 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
 
 }  // namespace
 
-ImplicitRunSummary runImplicit(const model::Model& model, const RunOptions& options, std::ostream& log) {
+void requireDistributableImplicitRun(const model::Model& model, const RunOptions& options) {
   const auto communicator = parallel::Communicator::world();
-  if (communicator.distributed())
-    throw std::invalid_argument(model.deck.sourceName + ": solver.type: the implicit solver runs on one rank (the " +
-                                std::to_string(communicator.size()) +
-                                " ranks of mpirun are for explicit decks, docs/parallel.md); run it without mpirun");
+  if (!communicator.distributed()) return;
+  const auto& deck = model.deck;
+  const std::string ranks = " in a run on " + std::to_string(communicator.size()) + " ranks";
+  if (deck.solver.implicitSettings.preconditioner == deck::Preconditioner::Direct)
+    throw std::invalid_argument(deck.sourceName + ": solver.preconditioner: direct factors the whole tangent, which no "
+                                "rank holds" + ranks + "; use cholesky (each rank's block factored, preconditioning "
+                                "CG over all ranks), amg or block-jacobi");
+  requireNoCheckpointsOnRanks(model, options, communicator.size());
+}
+
+ImplicitRunSummary runImplicit(const model::Model& model, const RunOptions& options, std::ostream& log) {
   if constexpr (!std::is_same_v<ExecutionSpace, HostExecutionSpace>)
     if (options.backend == Backend::Host) return runImplicitOn(HostExecutionSpace{}, model, options, log);
   return runImplicitOn(ExecutionSpace{}, model, options, log);

@@ -2,6 +2,8 @@
 
 #include <filesystem>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
 namespace perishell::solvers {
 
@@ -100,6 +102,16 @@ io::Checkpoint readRunCheckpoint(const std::string& directory, const model::Mode
                               std::to_string(elements) + " (support layer included): restart with the deck of "
                               "that run (" + checkpoint.text("run.deck") + ")");
   return checkpoint;
+}
+
+void requireNoCheckpointsOnRanks(const model::Model& model, const RunOptions& options, int ranks) {
+  if (ranks <= 1) return;
+  if (model.deck.output.checkpoints())
+    throw std::invalid_argument(model.deck.sourceName + ": output.checkpoint-every: checkpoints are not written in a run "
+                                "on " + std::to_string(ranks) + " ranks yet; leave the key out or run on one rank");
+  if (!options.restartDirectory.empty())
+    throw std::invalid_argument("--restart: a run on " + std::to_string(ranks) +
+                                " ranks cannot continue a checkpoint yet; restart on one rank");
 }
 
 }  // namespace perishell::solvers

@@ -53,9 +53,10 @@ LocalModel<ExecutionSpaceT> makeLocalModel(const ExecutionSpaceT& space, const m
 
 // The partition table on the root's log: nodes, halo, elements, bonds and neighbours per rank,
 // and the imbalance of owned bonds + elements (max over mean); doublesPerNode: what the
-// solver's exchange sends per halo node. Collective.
+// solver's exchange sends per halo node, once per `exchangeEvery` (a step, a Krylov iteration).
+// Collective.
 inline void printPartition(const parallel::PartitionRow& mine, int doublesPerNode, const parallel::Communicator& communicator,
-                           std::ostream& log) {
+                           std::ostream& log, const char* exchangeEvery = "step") {
   const auto rows = parallel::gatherPartitionRows(mine, communicator);
   if (!communicator.root()) return;
   log << "partition: " << rows.size() << " ranks (METIS on the node graph, weighted by bonds and elements)\n"
@@ -78,7 +79,7 @@ inline void printPartition(const parallel::PartitionRow& mine, int doublesPerNod
   imbalance.precision(3);
   imbalance << largest / (total / double(rows.size()));
   log << "  imbalance (max / mean of bonds + 30 x shell elements + nodes): " << imbalance.str() << "\n"
-      << "  halo exchange per step: " << exchangedNodes << " halo nodes x " << doublesPerNode << " doubles = "
+      << "  halo exchange per " << exchangeEvery << ": " << exchangedNodes << " halo nodes x " << doublesPerNode << " doubles = "
       << exchangedNodes * doublesPerNode * 8 << " bytes sent over all ranks\n";
 }
 

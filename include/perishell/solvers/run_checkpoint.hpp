@@ -39,6 +39,10 @@ class RunDirectory {
 // DIR/checkpoint.h5.
 std::string checkpointPath(const std::string& directory);
 
+// A distributed run writes and reads no checkpoint yet (docs/parallel.md): throws
+// std::invalid_argument naming output.checkpoint-every or --restart when ranks > 1.
+void requireNoCheckpointsOnRanks(const model::Model& model, const RunOptions& options, int ranks);
+
 // When checkpoints are due: every output.checkpoint-every steps (increments) and/or minutes
 // of wall time since the last one (or the run's start).
 class CheckpointSchedule {

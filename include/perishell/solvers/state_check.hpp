@@ -16,6 +16,13 @@ class RunStateError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Newton gave up on an increment after every allowed cut; the state is the last converged one.
+// Its decisions rest on global norms, so every rank of a distributed run throws it alike.
+class NewtonFailure : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 // A displacement this many times the mesh's bounding-box diagonal is a blown-up state, not a
 // deformation of the shell.
 constexpr double blownUpDisplacementFactor = 1.0e3;

@@ -176,11 +176,15 @@ void checkCgArguments(const CrsMatrix<ExecutionSpaceT>& A,
 // preconditioner: a prebuilt operator (M ~ A^-1, kept across solves, e.g. a multigrid
 // hierarchy updated per Newton iteration) used instead of options.preconditioner; null for
 // none.
+// rows: where A, b and x hold one rank's rows of a system split over ranks (DistributedRows;
+// collective then, and the preconditioner must leave the halo rows of its output zero when
+// those of its input are); null on a single rank.
 template <class ExecutionSpaceT>
 CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
                  const Kokkos::View<const double*, typename ExecutionSpaceT::memory_space>& b,
                  const VectorView<typename ExecutionSpaceT::memory_space>& x, const CgOptions& options,
-                 const Teuchos::RCP<const Belos::Operator<double>>& preconditioner) {
+                 const Teuchos::RCP<const Belos::Operator<double>>& preconditioner,
+                 const SharedRows<typename ExecutionSpaceT::memory_space>& rows = nullptr) {
   static_assert(Kokkos::is_execution_space<ExecutionSpaceT>::value, "solveCg needs a Kokkos execution space");
   using memory_space = typename ExecutionSpaceT::memory_space;
   using MV = Belos::MultiVec<double>;
@@ -189,15 +193,16 @@ CgResult solveCg(const CrsMatrix<ExecutionSpaceT>& A,
 
   detail::checkCgArguments(A, b, x, options);
   const auto n = static_cast<std::size_t>(A.numRows());
-  if (n == 0) return CgResult{true, 0, 0.0, "CG", ""};
+  // A rank with no rows still takes part in a distributed solve's collectives.
+  if (n == 0 && !rows) return CgResult{true, 0, 0.0, "CG", ""};
 
   // Single-column LayoutLeft views over the caller's memory, so Belos updates x in place.
   // Belos only reads b (LinearProblem takes it as RCP<const MV>), so casting away const is safe.
   const MultiVectorView<memory_space> x2d = Unmanaged2D(x.data(), n, 1);
   const MultiVectorView<memory_space> b2d = Unmanaged2D(const_cast<double*>(b.data()), n, 1);
-  const Teuchos::RCP<MV> X = Teuchos::rcp(new KokkosMultiVector<ExecutionSpaceT>(x2d));
-  const Teuchos::RCP<const MV> B = Teuchos::rcp(new KokkosMultiVector<ExecutionSpaceT>(b2d));
-  const Teuchos::RCP<const OP> op = Teuchos::rcp(new CrsOperator<ExecutionSpaceT>(A));
+  const Teuchos::RCP<MV> X = Teuchos::rcp(new KokkosMultiVector<ExecutionSpaceT>(x2d, rows));
+  const Teuchos::RCP<const MV> B = Teuchos::rcp(new KokkosMultiVector<ExecutionSpaceT>(b2d, rows));
+  const Teuchos::RCP<const OP> op = Teuchos::rcp(new CrsOperator<ExecutionSpaceT>(A, rows));
 
   std::string breakdown;
   if (options.method == CgOptions::Method::Cg) {

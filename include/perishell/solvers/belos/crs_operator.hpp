@@ -116,9 +116,22 @@ void scaleRows(const DiagonalView& d, const MultiView& x, const MultiView& y) {
       });
 }
 
+// y(:, column) = 0 on the rows this rank does not own (DistributedRows).
+template <class ExecutionSpaceT, class OwnedView, class MultiView>
+void zeroHaloRows(const OwnedView& owned, const MultiView& y, int column) {
+  Kokkos::parallel_for(
+      "perishell::belos::zero_halo_rows", Kokkos::RangePolicy<ExecutionSpaceT>(0, std::int64_t(y.extent(0))),
+      KOKKOS_LAMBDA(const std::int64_t row) {
+        if (!owned(row)) y(row, column) = 0.0;
+      });
+}
+
 }  // namespace detail
 
-// y = A x (or A^T x) with KokkosSparse::spmv. Holds the matrix by shallow copy.
+// y = A x (or A^T x) with KokkosSparse::spmv. Holds the matrix by shallow copy. With
+// DistributedRows, A holds this rank's rows (owned rows complete, their columns reaching
+// into the halo): x's halo rows are filled from their owners into a copy before the product,
+// and y's halo rows are zero.
 template <class ExecutionSpaceT>
 class CrsOperator final : public Belos::Operator<double> {
   static_assert(Kokkos::is_execution_space<ExecutionSpaceT>::value,
@@ -126,8 +139,9 @@ class CrsOperator final : public Belos::Operator<double> {
 
  public:
   using matrix_type = CrsMatrix<ExecutionSpaceT>;
+  using memory_space = typename ExecutionSpaceT::memory_space;
 
-  explicit CrsOperator(const matrix_type& A) : A_(A) {}
+  explicit CrsOperator(const matrix_type& A, SharedRows<memory_space> rows = nullptr) : A_(A), rows_(std::move(rows)) {}
 
   const matrix_type& matrix() const { return A_; }
 
@@ -141,14 +155,30 @@ class CrsOperator final : public Belos::Operator<double> {
     // spmv implements the transpose as well; for real scalars CONJTRANS is the same thing.
     const bool transposed = trans != Belos::NOTRANS;
     detail::checkApplyShapes(xk, yk, transposed ? rows : cols, transposed ? cols : rows, who);
+    if (rows_) {
+      if (transposed) throw std::invalid_argument(std::string(who) + ": no transpose for rows split over ranks");
+      if (filled_.extent(0) != cols)
+        filled_ = Kokkos::View<double*, Kokkos::Device<ExecutionSpaceT, memory_space>>("perishell::belos::halo_filled", cols);
+      for (int j = 0; j < xk.GetNumberVecs(); ++j) {
+        Kokkos::deep_copy(filled_, Kokkos::subview(xk.deviceView(), Kokkos::ALL(), j));
+        ExecutionSpaceT().fence();
+        rows_->fillHalo(VectorView<memory_space>(filled_.data(), cols));
+        const auto y = Kokkos::subview(yk.deviceView(), Kokkos::ALL(), j);
+        KokkosSparse::spmv(KokkosSparse::NoTranspose, 1.0, A_, filled_, 0.0, y);
+        detail::zeroHaloRows<ExecutionSpaceT>(rows_->owned, yk.deviceView(), j);
+      }
+      return;
+    }
     KokkosSparse::spmv(transposed ? KokkosSparse::Transpose : KokkosSparse::NoTranspose, 1.0, A_,
                        xk.deviceView(), 0.0, yk.deviceView());
   }
 
-  bool HasApplyTranspose() const override { return true; }
+  bool HasApplyTranspose() const override { return !rows_; }
 
  private:
   matrix_type A_;
+  SharedRows<memory_space> rows_;
+  mutable Kokkos::View<double*, Kokkos::Device<ExecutionSpaceT, memory_space>> filled_;
 };
 
 // Point Jacobi: y = D^{-1} x with D = diag(A). Symmetric, so it serves as left or right

@@ -4,6 +4,7 @@
 // Kokkos adapter of its own; this one implements the run-time polymorphic interface in
 // BelosMultiVec.hpp, which Belos reaches through MultiVecTraits<double, MultiVec<double>>.
 #include <perishell/core/types.hpp>
+#include <perishell/parallel/communicator.hpp>
 
 #include <BelosMultiVec.hpp>
 #include <BelosTypes.hpp>
@@ -20,9 +21,13 @@
 #include <Kokkos_Core.hpp>
 #include <Kokkos_Random.hpp>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -32,7 +37,51 @@
 
 namespace perishell::belos {
 
+// The rows of a linear system split over the ranks of a distributed run (docs/parallel.md):
+// each rank's vectors hold its owned rows and its halo rows. Dots and norms take the owned
+// rows only and reduce them over the ranks; the operator sets the halo rows of its input to
+// their owners' values before it multiplies, and leaves zeros in the halo rows of its output.
+// Null on a single rank: every row is owned and nothing is reduced.
+template <class MemorySpaceT>
+struct DistributedRows {
+  Kokkos::View<const std::uint8_t*, MemorySpaceT> owned;  // 1 for a row this rank owns
+  parallel::Communicator communicator = parallel::Communicator::self();
+  long long globalRows = 0;  // owned rows over every rank
+  // Sets the halo rows of a vector to their owners' values. Collective.
+  std::function<void(const VectorView<MemorySpaceT>&)> fillHalo;
+};
+
+template <class MemorySpaceT>
+using SharedRows = std::shared_ptr<const DistributedRows<MemorySpaceT>>;
+
 namespace detail {
+
+enum class RowReduction { Dot, AbsSum, AbsMax };
+
+// sum (or max) over the owned rows of a(:, i) . b(:, j), |a(:, i)| or max |a(:, i)|.
+template <class ExecutionSpaceT, class ViewT>
+double ownedRowReduction(const Kokkos::View<const std::uint8_t*, typename ExecutionSpaceT::memory_space>& owned,
+                         const ViewT& a, int i, const ViewT& b, int j, RowReduction kind) {
+  double result = 0.0;
+  const Kokkos::RangePolicy<ExecutionSpaceT> rows(0, static_cast<std::int64_t>(a.extent(0)));
+  if (kind == RowReduction::AbsMax) {
+    Kokkos::parallel_reduce(
+        "perishell::belos::owned_max", rows,
+        KOKKOS_LAMBDA(const std::int64_t row, double& largest) {
+          const double value = owned(row) ? Kokkos::Experimental::fabs(a(row, i)) : 0.0;
+          largest = value > largest ? value : largest;
+        },
+        Kokkos::Max<double>(result));
+    return result;
+  }
+  Kokkos::parallel_reduce(
+      "perishell::belos::owned_sum", rows,
+      KOKKOS_LAMBDA(const std::int64_t row, double& sum) {
+        if (owned(row)) sum += kind == RowReduction::Dot ? a(row, i) * b(row, j) : Kokkos::Experimental::fabs(a(row, i));
+      },
+      result);
+  return result;
+}
 
 // The kernels live in free functions: nvcc rejects extended lambdas whose enclosing
 // function is a non-public class member.
@@ -94,11 +143,14 @@ class KokkosMultiVector final : public Belos::MultiVec<double> {
   using device_view_type =
       Kokkos::View<double**, Kokkos::LayoutLeft, Kokkos::Device<ExecutionSpaceT, memory_space>>;
 
-  KokkosMultiVector(const std::string& name, std::ptrdiff_t length, int numVectors)
-      : view_(name, checkedLength(length), checkedNumVectors(numVectors)) {}
+  // rows: how the rows are split over ranks (DistributedRows), or null on a single rank.
+  KokkosMultiVector(const std::string& name, std::ptrdiff_t length, int numVectors,
+                    SharedRows<memory_space> rows = nullptr)
+      : view_(name, checkedLength(length), checkedNumVectors(numVectors)), rows_(std::move(rows)) {}
 
   // Aliases the caller's storage: Belos' writes land in `view`.
-  explicit KokkosMultiVector(const view_type& view) : view_(view) {
+  explicit KokkosMultiVector(const view_type& view, SharedRows<memory_space> rows = nullptr)
+      : view_(view), rows_(std::move(rows)) {
     if (view_.extent(1) == 0) {
       throw std::invalid_argument(
           "perishell::belos::KokkosMultiVector: a Belos multivector needs at least one column");
@@ -112,18 +164,18 @@ class KokkosMultiVector final : public Belos::MultiVec<double> {
   Belos::MultiVec<double>* Clone(const int numvecs) const override {
     // Belos allows uninitialized contents; the zero fill (one kernel) keeps fresh
     // multivectors deterministic.
-    return new KokkosMultiVector(view_.label(), GetGlobalLength(), numvecs);
+    return new KokkosMultiVector(view_.label(), localLength(), numvecs, rows_);
   }
 
   Belos::MultiVec<double>* CloneCopy() const override {
-    auto* copy = new KokkosMultiVector(view_.label(), GetGlobalLength(), GetNumberVecs());
+    auto* copy = new KokkosMultiVector(view_.label(), localLength(), GetNumberVecs(), rows_);
     Kokkos::deep_copy(copy->view_, view_);
     return copy;
   }
 
   Belos::MultiVec<double>* CloneCopy(const std::vector<int>& index) const override {
     checkIndex(index, "CloneCopy");
-    auto* copy = new KokkosMultiVector(view_.label(), GetGlobalLength(), static_cast<int>(index.size()));
+    auto* copy = new KokkosMultiVector(view_.label(), localLength(), static_cast<int>(index.size()), rows_);
     if (isContiguous(index)) {
       Kokkos::deep_copy(copy->view_, columns(index.front(), index.size()));
     } else {
@@ -141,20 +193,25 @@ class KokkosMultiVector final : public Belos::MultiVec<double> {
           " are not contiguous and increasing; a writable view must alias the parent's storage, "
           "which a LayoutLeft View can only do for a contiguous column range");
     }
-    return new KokkosMultiVector(columns(index.front(), index.size()));
+    return new KokkosMultiVector(columns(index.front(), index.size()), rows_);
   }
 
   const Belos::MultiVec<double>* CloneView(const std::vector<int>& index) const override {
     checkIndex(index, "CloneView");
     if (isContiguous(index)) {
-      return new KokkosMultiVector(columns(index.front(), index.size()));
+      return new KokkosMultiVector(columns(index.front(), index.size()), rows_);
     }
     // Read-only, so a copy is an acceptable stand-in for a view here.
     return CloneCopy(index);
   }
 
   // ------------------------------------------------------------------ dimensions
-  std::ptrdiff_t GetGlobalLength() const override { return static_cast<std::ptrdiff_t>(view_.extent(0)); }
+  // The rows over every rank (this rank's on a single rank).
+  std::ptrdiff_t GetGlobalLength() const override {
+    return rows_ ? static_cast<std::ptrdiff_t>(rows_->globalRows) : localLength();
+  }
+  std::ptrdiff_t localLength() const { return static_cast<std::ptrdiff_t>(view_.extent(0)); }
+  const SharedRows<memory_space>& rows() const { return rows_; }
   int GetNumberVecs() const override { return static_cast<int>(view_.extent(1)); }
 
   // ------------------------------------------------------------------ updates
@@ -232,6 +289,17 @@ class KokkosMultiVector final : public Belos::MultiVec<double> {
     // One multi-column dot per column of *this rather than KokkosBlas::gemm: Kernels 3.4's
     // gemm gives each 24 x 64 block of C to one team, so for this small C a single team
     // would walk all n rows; dot is a full-width parallel reduction.
+    if (rows_) {
+      std::vector<double> dots(std::size_t(m) * k);
+      for (int j = 0; j < k; ++j)
+        for (int i = 0; i < m; ++i)
+          dots[std::size_t(j) * m + i] = detail::ownedRowReduction<ExecutionSpaceT>(
+              rows_->owned, a.deviceView(), i, deviceView(), j, detail::RowReduction::Dot);
+      rows_->communicator.sum(dots.data(), static_cast<int>(dots.size()));
+      for (int j = 0; j < k; ++j)
+        for (int i = 0; i < m; ++i) B(i, j) = alpha * dots[std::size_t(j) * m + i];
+      return;
+    }
     device_view_type c(Kokkos::view_alloc(Kokkos::WithoutInitializing, "perishell::belos::AtB"), m, k);
     const device_view_type aView = a.deviceView();
     const device_view_type self = deviceView();
@@ -247,6 +315,16 @@ class KokkosMultiVector final : public Belos::MultiVec<double> {
   void MvDot(const Belos::MultiVec<double>& A, std::vector<double>& b) const override {
     const auto& a = cast(A, "MvDot");
     checkShape(a, "MvDot");
+    if (rows_) {
+      std::vector<double> dots(view_.extent(1));
+      for (std::size_t j = 0; j < dots.size(); ++j)
+        dots[j] = detail::ownedRowReduction<ExecutionSpaceT>(rows_->owned, a.deviceView(), int(j), deviceView(),
+                                                             int(j), detail::RowReduction::Dot);
+      rows_->communicator.sum(dots.data(), static_cast<int>(dots.size()));
+      if (b.size() < dots.size()) b.resize(dots.size());
+      std::copy(dots.begin(), dots.end(), b.begin());
+      return;
+    }
     Kokkos::View<double*, typename device_view_type::device_type> dots("perishell::belos::dots",
                                                                       view_.extent(1));
     KokkosBlas::dot(dots, a.deviceView(), deviceView());
@@ -254,6 +332,10 @@ class KokkosMultiVector final : public Belos::MultiVec<double> {
   }
 
   void MvNorm(std::vector<double>& normvec, Belos::NormType type = Belos::TwoNorm) const override {
+    if (rows_) {
+      distributedNorm(normvec, type);
+      return;
+    }
     Kokkos::View<double*, typename device_view_type::device_type> norms("perishell::belos::norms",
                                                                        view_.extent(1));
     switch (type) {
@@ -307,6 +389,29 @@ class KokkosMultiVector final : public Belos::MultiVec<double> {
   }
 
  private:
+  // Norms over the owned rows of every rank: sums of squares and of magnitudes are summed,
+  // largest magnitudes maximised.
+  void distributedNorm(std::vector<double>& normvec, Belos::NormType type) const {
+    const auto kind = type == Belos::OneNorm   ? detail::RowReduction::AbsSum
+                      : type == Belos::TwoNorm ? detail::RowReduction::Dot
+                      : type == Belos::InfNorm ? detail::RowReduction::AbsMax
+                                               : throw std::invalid_argument(
+                                                     "perishell::belos::KokkosMultiVector::MvNorm: unsupported norm type " +
+                                                     std::to_string(static_cast<int>(type)));
+    std::vector<double> norms(view_.extent(1));
+    for (std::size_t j = 0; j < norms.size(); ++j)
+      norms[j] = detail::ownedRowReduction<ExecutionSpaceT>(rows_->owned, deviceView(), int(j), deviceView(), int(j),
+                                                            kind);
+    if (kind == detail::RowReduction::AbsMax)
+      rows_->communicator.max(norms.data(), static_cast<int>(norms.size()));
+    else
+      rows_->communicator.sum(norms.data(), static_cast<int>(norms.size()));
+    if (kind == detail::RowReduction::Dot)
+      for (auto& norm : norms) norm = std::sqrt(norm);
+    if (normvec.size() < norms.size()) normvec.resize(norms.size());
+    std::copy(norms.begin(), norms.end(), normvec.begin());
+  }
+
   static std::size_t checkedLength(std::ptrdiff_t length) {
     if (length < 0) {
       throw std::invalid_argument("perishell::belos::KokkosMultiVector: negative length " +
@@ -422,6 +527,7 @@ class KokkosMultiVector final : public Belos::MultiVec<double> {
   }
 
   view_type view_;
+  SharedRows<memory_space> rows_;
 };
 
 }  // namespace perishell::belos

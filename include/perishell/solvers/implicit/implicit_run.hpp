@@ -31,4 +31,8 @@ struct ImplicitRunSummary {
 // converged within its cuts.
 ImplicitRunSummary runImplicit(const model::Model& model, const RunOptions& options, std::ostream& log);
 
+// Under mpirun: throws std::invalid_argument naming the deck key or option that a distributed
+// implicit run refuses (the direct preconditioner, checkpoints, --restart). The same on every rank.
+void requireDistributableImplicitRun(const model::Model& model, const RunOptions& options);
+
 }  // namespace perishell::solvers

@@ -19,6 +19,8 @@
 #include <perishell/solvers/direct/factorization_preconditioner.hpp>
 #include <perishell/solvers/explicit/external_actions.hpp>
 #include <perishell/solvers/multigrid/smoothed_aggregation.hpp>
+#include <perishell/solvers/state_check.hpp>
+#include <perishell/parallel/node_distribution.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -124,12 +126,6 @@ struct NewtonOptions {
   bool mixedFormat = true;
 };
 
-// Newton gave up on an increment after every allowed cut; the state is the last converged one.
-class NewtonFailure : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
 // Wall time of the phases of the paper's Table 3, summed over the Newton iterations of an
 // advance (each phase fenced, so the times are the device's).
 struct PhaseSeconds {
@@ -183,9 +179,15 @@ class StaticNewtonSolver {
 
   // Either body may be empty (no elements / no PD nodes). The PD body's node k must be mesh
   // node k (pd::indexByMeshNodes; coupling/make_coupled_model.hpp builds both bodies).
+  // distribution: in a distributed run (docs/parallel.md), this rank's part: the bodies and
+  // actions are its local model's, its owned rows of the tangent are complete, and every
+  // reduction, convergence test and linear solve is global, so that all ranks take the same
+  // decisions. The preconditioner is per rank (additive over ranks: the tangent's owned block,
+  // coupling to other ranks' rows dropped). Collective in every member then.
   StaticNewtonSolver(const ExecutionSpaceT& space, LocalIndex numNodes, std::optional<shell::ShellBody<Memory>> shellBody,
                      std::optional<pd::PdBody<Memory>> pdBody, ExternalActions<Memory> actions,
-                     const NewtonOptions& options);
+                     const NewtonOptions& options,
+                     parallel::NodeDistribution<Memory> distribution = parallel::NodeDistribution<Memory>());
 
   // Moves the load factor from its current value to loadFactor (>= current) in sub-steps
   // sized by the Newton iterations of the last one (NewtonOptions::easyIterations), halving a
@@ -358,6 +360,22 @@ class StaticNewtonSolver {
 
   void markConstrainedDofs();
 
+  // The tangent's owned block for the per-rank preconditioner (distributed runs): entries
+  // coupling an owned row to a halo column dropped, halo rows the identity; K itself on a
+  // single rank. Symmetric and, where K is positive definite, positive definite.
+  Matrix preconditionerMatrix(const Matrix& K);
+
+  // Sets the halo rows of a vector of 6 DOF per local node to their owners' values (distributed
+  // runs; nothing on a single rank).
+  void fillHalo(const VectorView<Memory>& vector);
+
+  // A fresh factor (or a multigrid hierarchy, or the block-Jacobi family) made on every rank:
+  // a failure on one rank is thrown on all, so none waits in a collective.
+  template <class Build>
+  void onEveryRank(const char* what, Build&& build);
+
+  const parallel::Communicator& communicator() const { return distribution_.communicator(); }
+
  private:
   void notifyIteration(double target, const IncrementReport& report) const;
 
@@ -383,6 +401,11 @@ class StaticNewtonSolver {
   }
 
   ExecutionSpaceT space_;
+  parallel::NodeDistribution<Memory> distribution_;
+  // 1 for the nodes this rank owns (every node on a single rank): sums and norms take these.
+  Kokkos::View<std::uint8_t*, Memory> ownedNodes_;
+  belos::SharedRows<Memory> rows_;  // null on a single rank
+  VectorView<Memory> preconditionerValues_;
   IterationObserver observer_;
   LocalIndex numNodes_;
   std::optional<shell::ShellBody<Memory>> shell_;

@@ -5,16 +5,18 @@
 // and a file that uses the solver includes static_newton.hpp only.
 #include <perishell/solvers/implicit/static_newton.hpp>
 
+#include <exception>
+
 namespace perishell::solvers {
 
 namespace detail {
 
-// The diagonal of the nodes' bounding box [m] (a free function: CUDA allows no device lambda
-// in a constructor).
+// The diagonal of the nodes' bounding box [m], over every rank (a free function: CUDA allows
+// no device lambda in a constructor).
 template <class ExecutionSpaceT, class MemorySpaceT>
-double boundingBoxDiagonal(const ExecutionSpaceT& space, const CoordinateView<MemorySpaceT>& positions) {
-  if (positions.extent(0) == 0) return 0.0;
-  double low[3], high[3];
+double boundingBoxDiagonal(const ExecutionSpaceT& space, const CoordinateView<MemorySpaceT>& positions,
+                           const parallel::Communicator& communicator) {
+  double low[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, high[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   for (int d = 0; d < 3; ++d)
     Kokkos::parallel_reduce(
         "perishell::newton::modelExtent", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, positions.extent(0)),
@@ -23,7 +25,34 @@ double boundingBoxDiagonal(const ExecutionSpaceT& space, const CoordinateView<Me
           highest = positions(node, d) > highest ? positions(node, d) : highest;
         },
         Kokkos::Min<double>(low[d]), Kokkos::Max<double>(high[d]));
+  communicator.min(low, 3);
+  communicator.max(high, 3);
+  if (!(low[0] <= high[0])) return 0.0;
   return std::hypot(high[0] - low[0], high[1] - low[1], high[2] - low[2]);
+}
+
+// 1 for every DOF of a node this rank owns.
+template <class ExecutionSpaceT, class MemorySpaceT>
+Kokkos::View<std::uint8_t*, MemorySpaceT> ownedDofs(const ExecutionSpaceT& space,
+                                                    const Kokkos::View<std::uint8_t*, MemorySpaceT>& ownedNodes) {
+  Kokkos::View<std::uint8_t*, MemorySpaceT> dofs("perishell::newton::ownedDofs", 6 * ownedNodes.extent(0));
+  Kokkos::parallel_for(
+      "perishell::newton::ownedDofs", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, dofs.extent(0)),
+      KOKKOS_LAMBDA(const std::size_t dof) { dofs(dof) = ownedNodes(dof / 6); });
+  return dofs;
+}
+
+// The code of a failure for every rank to agree on (StaticNewtonSolver::onEveryRank): 0 none,
+// 1-3 a factorization's kind, 4 any other error.
+inline int failureCode(const std::exception_ptr& failure) {
+  if (!failure) return 0;
+  try {
+    std::rethrow_exception(failure);
+  } catch (const direct::FactorizationError& error) {
+    return 1 + static_cast<int>(error.kind());
+  } catch (...) {
+    return 4;
+  }
 }
 
 }  // namespace detail
@@ -32,8 +61,11 @@ template <class ExecutionSpaceT>
 StaticNewtonSolver<ExecutionSpaceT>::StaticNewtonSolver(const ExecutionSpaceT& space, LocalIndex numNodes,
                                                         std::optional<shell::ShellBody<Memory>> shellBody,
                                                         std::optional<pd::PdBody<Memory>> pdBody,
-                                                        ExternalActions<Memory> actions, const NewtonOptions& options)
+                                                        ExternalActions<Memory> actions, const NewtonOptions& options,
+                                                        parallel::NodeDistribution<Memory> distribution)
     : space_(space),
+      distribution_(std::move(distribution)),
+      ownedNodes_("perishell::newton::ownedNodes", numNodes),
       numNodes_(numNodes),
       shell_(std::move(shellBody)),
       pd_(std::move(pdBody)),
@@ -61,11 +93,28 @@ StaticNewtonSolver<ExecutionSpaceT>::StaticNewtonSolver(const ExecutionSpaceT& s
                                               actions_.mirrorImages.empty() ? assembly::SelfBonds::Refused
                                                                             : assembly::SelfBonds::Allowed);
   values_ = VectorView<Memory>("perishell::newton::tangentValues", pattern_.columns.extent(0));
+  if (distribution_.distributed()) {
+    Kokkos::deep_copy(space_, ownedNodes_, distribution_.owned());
+    auto rows = std::make_shared<belos::DistributedRows<Memory>>();
+    rows->owned = detail::ownedDofs(space_, ownedNodes_);
+    rows->communicator = communicator();
+    rows->globalRows = 6 * distribution_.meshNodes(numNodes);
+    // Its own copy of the exchange: the solver may move, the operator's halo filling stays.
+    const auto halo = std::make_shared<parallel::NodeDistribution<Memory>>(distribution_);
+    rows->fillHalo = [halo, space](const VectorView<Memory>& vector) {
+      halo->exchange(space, pd::NodalVectorView<Memory>(vector.data(), vector.extent(0) / 6));
+    };
+    rows_ = rows;
+  } else {
+    Kokkos::deep_copy(space_, ownedNodes_, 1);
+  }
   markConstrainedDofs();
   freeDofs_ = countFreeDofs();
-  modelSize_ = detail::boundingBoxDiagonal(space_, shell_ ? shell_->referencePositions
-                                                   : pd_ ? pd_->referencePositions
-                                                         : CoordinateView<Memory>("no nodes", 0));
+  modelSize_ = detail::boundingBoxDiagonal(space_,
+                                           shell_ ? shell_->referencePositions
+                                           : pd_  ? pd_->referencePositions
+                                                  : CoordinateView<Memory>("no nodes", 0),
+                                           communicator());
   active_ = options_.preconditioner;
   if (active_ == deck::Preconditioner::Auto)
     active_ = freeDofs_ <= options_.autoCholeskyDofs ? deck::Preconditioner::Cholesky : deck::Preconditioner::Amg;
@@ -206,10 +255,10 @@ std::string StaticNewtonSolver<ExecutionSpaceT>::arcLengthObstacle() const {
   for (std::size_t p = 0; p < actions_.patternCurves.size(); ++p)
     if (actions_.patternCurves[p]) return "a load follows a curve";
   const auto values = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.prescribedValue);
+  bool prescribesMotion = false;
   for (std::size_t node = 0; node < values.extent(0); ++node)
-    for (int d = 0; d < 6; ++d)
-      if (values(node, d) != 0.0) return "a support prescribes a nonzero displacement or rotation";
-  return "";
+    for (int d = 0; d < 6; ++d) prescribesMotion = prescribesMotion || values(node, d) != 0.0;
+  return communicator().any(prescribesMotion) ? "a support prescribes a nonzero displacement or rotation" : "";
 }
 
 template <class ExecutionSpaceT>
@@ -379,17 +428,19 @@ double StaticNewtonSolver<ExecutionSpaceT>::roundOffFloor(const Matrix& K) const
   const auto columns = K.graph.entries;
   const auto values = K.values;
   const double size = modelSize_;
+  const auto owned = ownedNodes_;
   double sumOfSquares = 0.0;
   Kokkos::parallel_reduce(
       "perishell::newton::roundOffFloor", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, K.numRows()),
       KOKKOS_LAMBDA(const LocalIndex row, double& sum) {
+        if (!owned(row / 6)) return;
         double magnitude = 0.0;
         for (auto entry = rowMap(row); entry < rowMap(row + 1); ++entry)
           magnitude += Kokkos::Experimental::fabs(values(entry)) * (columns(entry) % 6 < 3 ? size : 1.0);
         sum += magnitude * magnitude;
       },
       sumOfSquares);
-  return std::numeric_limits<double>::epsilon() * std::sqrt(sumOfSquares);
+  return std::numeric_limits<double>::epsilon() * std::sqrt(communicator().sum(sumOfSquares));
 }
 
 template <class ExecutionSpaceT>
@@ -397,17 +448,19 @@ double StaticNewtonSolver<ExecutionSpaceT>::largestTranslation(bool ofIncrement)
   const auto du = correction_;
   const auto u = state_.displacements;
   const auto start = saved_.displacements;
+  const auto owned = ownedNodes_;
   double largest = 0.0;
   Kokkos::parallel_reduce(
       "perishell::newton::largestTranslation", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes_),
       KOKKOS_LAMBDA(const LocalIndex node, double& value) {
+        if (!owned(node)) return;
         for (int d = 0; d < 3; ++d) {
           const double magnitude = Kokkos::Experimental::fabs(ofIncrement ? u(node, d) - start(node, d) : du(node, d));
           value = magnitude > value ? magnitude : value;
         }
       },
       Kokkos::Max<double>(largest));
-  return largest;
+  return communicator().max(largest);
 }
 
 template <class ExecutionSpaceT>
@@ -416,6 +469,7 @@ auto StaticNewtonSolver<ExecutionSpaceT>::computeOutOfBalance(double loadFactor)
   const auto patterns = actions_.loadPatterns;
   const auto r = outOfBalance_;
   const int numPatterns = actions_.numPatterns();
+  const auto owned = ownedNodes_;
   double loadSquared = 0.0;
   Kokkos::parallel_reduce(
       "perishell::newton::loads", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes_),
@@ -424,10 +478,11 @@ auto StaticNewtonSolver<ExecutionSpaceT>::computeOutOfBalance(double loadFactor)
           double load = 0.0;
           for (int p = 0; p < numPatterns; ++p) load += factors.values[p] * patterns(node, 6 * p + d);
           r(node, d) = load;
-          sum += load * load;
+          if (owned(node)) sum += load * load;
         }
       },
       loadSquared);
+  loadSquared = communicator().sum(loadSquared);
   if (pd_) {
     const pd::BondForceOutputs<Memory> outputs{r, VectorView<Memory>(), fractureScratch_, intactScratch_};
     // Node-gather, as the explicit step: in the app (libperishell, where the explicit driver
@@ -450,15 +505,17 @@ double StaticNewtonSolver<ExecutionSpaceT>::dofDot(const pd::NodalVectorView<Mem
                                                    const pd::NodalVectorView<Memory>& b,
                                                    bool overPrescribedDofs) const {
   const auto constrained = actions_.constrainedDofs;
+  const auto owned = ownedNodes_;
   double dot = 0.0;
   Kokkos::parallel_reduce(
       "perishell::newton::dofDot", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes_),
       KOKKOS_LAMBDA(const LocalIndex node, double& sum) {
+        if (!owned(node)) return;
         for (int d = 0; d < 6; ++d)
           if (((constrained(node) >> d) & 1u) == (overPrescribedDofs ? 1u : 0u)) sum += a(node, d) * b(node, d);
       },
       dot);
-  return dot;
+  return communicator().sum(dot);
 }
 
 template <class ExecutionSpaceT>
@@ -466,6 +523,16 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveLinear(const Matrix& K
                                                                  const VectorView<Memory>& solution,
                                                                  const belos::CgOptions& linear, bool attemptStart,
                                                                  IncrementReport& report) {
+  // The halo rows are other ranks' equations: zero here, they stay zero through the Krylov
+  // method (belos::DistributedRows), and the solution's are filled from their owners.
+  if (rows_) {
+    const auto owned = rows_->owned;
+    Kokkos::parallel_for(
+        "perishell::newton::zeroHaloRows", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, rhs.extent(0)),
+        KOKKOS_LAMBDA(const std::size_t dof) {
+          if (!owned(dof)) rhs(dof) = 0.0;
+        });
+  }
   if (usesFactor()) {
     try {
       return solveWithFactor(K, rhs, solution, linear, report);
@@ -502,16 +569,19 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveOnce(const Matrix& K, 
   belos::CgOptions limited = linear;
   Teuchos::RCP<const Belos::Operator<double>> preconditioner;
   if (!amg) {
-    preconditioner = belos::detail::makePreconditioner(K, linear);
+    onEveryRank("the block-Jacobi preconditioner",
+                [&] { preconditioner = belos::detail::makePreconditioner(preconditionerMatrix(K), linear); });
   } else {
     if (!multigrid_ || rebuild) {
       ++report.preconditionerBuilds;
       updateCurrentPositions();
-      if (multigrid_)
-        multigrid_->update(K, currentPositions_);
-      else
-        multigrid_ = std::make_shared<multigrid::SmoothedAggregationPreconditioner<ExecutionSpaceT>>(space_, K,
-                                                                                                     currentPositions_);
+      onEveryRank("the multigrid preconditioner", [&] {
+        if (multigrid_)
+          multigrid_->update(preconditionerMatrix(K), currentPositions_);
+        else
+          multigrid_ = std::make_shared<multigrid::SmoothedAggregationPreconditioner<ExecutionSpaceT>>(
+              space_, preconditionerMatrix(K), currentPositions_);
+      });
     } else {
       limited.maxIterations = std::min(linear.maxIterations, reuseIterationLimit());
     }
@@ -520,7 +590,8 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveOnce(const Matrix& K, 
   report.seconds.preconditioner += fencedSecondsSince(space_, start);
   Kokkos::deep_copy(space_, solution, 0.0);
   start = Clock::now();
-  const belos::CgResult result = belos::solveCg<ExecutionSpaceT>(K, rhs, solution, limited, preconditioner);
+  const belos::CgResult result = belos::solveCg<ExecutionSpaceT>(K, rhs, solution, limited, preconditioner, rows_);
+  fillHalo(solution);
   report.seconds.linearSolve += fencedSecondsSince(space_, start);
   report.linearIterations += result.iterations;
   if (amg) {
@@ -567,19 +638,30 @@ direct::FactorizationInfo StaticNewtonSolver<ExecutionSpaceT>::factorize(const M
   if (!factor_) factor_ = std::make_unique<direct::FactorizationPreconditioner<ExecutionSpaceT>>(K);
   factorCurrent_ = false;  // a failed factorization leaves none
   direct::FactorizationInfo info;
-  try {
-    info = factor_->factorize(K);
-  } catch (const direct::FactorizationError& error) {
-    if (error.kind() != direct::FactorizationError::Kind::Singular || error.row() < 0) throw;
-    static const char* dofNames[6] = {"ux", "uy", "uz", "rx", "ry", "rz"};
-    throw direct::FactorizationError(
-        error.kind(),
-        "the tangent is singular (a mechanism, or a DOF that nothing holds): a pivot vanished at "
-        "DOF " +
-            std::string(dofNames[error.row() % 6]) + " of mesh node " + std::to_string(error.row() / 6 + 1) +
-            " (1-based, in mesh order)",
-        error.row());
-  }
+  onEveryRank("the Cholesky factorization", [&] {
+    try {
+      info = factor_->factorize(preconditionerMatrix(K));
+    } catch (const direct::FactorizationError& error) {
+      if (error.kind() != direct::FactorizationError::Kind::Singular || error.row() < 0) throw;
+      static const char* dofNames[6] = {"ux", "uy", "uz", "rx", "ry", "rz"};
+      long long node = error.row() / 6;
+      if (distribution_.distributed()) {
+        const auto globalIds = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, distribution_.globalIds());
+        node = globalIds(node);
+      }
+      throw direct::FactorizationError(
+          error.kind(),
+          "the tangent is singular (a mechanism, or a DOF that nothing holds): a pivot vanished at "
+          "DOF " +
+              std::string(dofNames[error.row() % 6]) + " of mesh node " + std::to_string(node + 1) +
+              " (1-based, in mesh order)",
+          error.row());
+    }
+  });
+  // Over ranks: the owned blocks' negative pivots. A block that is not positive definite makes
+  // the tangent indefinite; the converse may miss a limit point (docs/parallel.md).
+  info.negativePivots = static_cast<long>(communicator().sum(static_cast<long long>(info.negativePivots)));
+  info.positiveDefinite = !communicator().any(!info.positiveDefinite);
   report.seconds.preconditioner += fencedSecondsSince(space_, start);
   ++report.factorizations;
   if (!info.positiveDefinite) report.passedUnstableState = true;
@@ -603,7 +685,8 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::krylovWithFactor(const Matr
   Kokkos::deep_copy(space_, solution, 0.0);
   const auto start = std::chrono::steady_clock::now();
   const belos::CgResult result = belos::solveCg<ExecutionSpaceT>(
-      K, rhs, solution, linear, Teuchos::rcp<const Belos::Operator<double>>(factor_.get(), false));
+      K, rhs, solution, linear, Teuchos::rcp<const Belos::Operator<double>>(factor_.get(), false), rows_);
+  fillHalo(solution);
   report.seconds.linearSolve += fencedSecondsSince(space_, start);
   report.linearIterations += result.iterations;
   return result;
@@ -623,11 +706,12 @@ void StaticNewtonSolver<ExecutionSpaceT>::switchToCholeskyWhenAmgStruggles(Incre
 template <class ExecutionSpaceT>
 long long StaticNewtonSolver<ExecutionSpaceT>::countFreeDofs() const {
   const auto flags = isConstrained_;
+  const auto owned = ownedNodes_;
   long long count = 0;
   Kokkos::parallel_reduce(
       "perishell::newton::countFreeDofs", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, flags.extent(0)),
-      KOKKOS_LAMBDA(const std::size_t dof, long long& sum) { sum += flags(dof) ? 0 : 1; }, count);
-  return count;
+      KOKKOS_LAMBDA(const std::size_t dof, long long& sum) { sum += flags(dof) || !owned(dof / 6) ? 0 : 1; }, count);
+  return communicator().sum(count);
 }
 
 template <class ExecutionSpaceT>
@@ -702,7 +786,8 @@ void StaticNewtonSolver<ExecutionSpaceT>::applyPrescribedValues(double loadFacto
         }
       },
       changed);
-  if (changed > 0) ++stateVersion_;
+  // Every rank alike: the tangent is reused, or not, on all.
+  if (communicator().max(changed) > 0) ++stateVersion_;
   prescribedFactor_ = loadFactor;
   assembly::imposeMirrorImages(space_, actions_.mirrorImages, u, q, actions_.prescribedAt(loadFactor, loadFactor));
 }
@@ -759,10 +844,12 @@ double StaticNewtonSolver<ExecutionSpaceT>::translationDot(int first, int second
   const auto u = state_.displacements;
   const auto start = saved_.displacements;
   const auto last = lastArcDirection_;
+  const auto owned = ownedNodes_;
   double dot = 0.0;
   Kokkos::parallel_reduce(
       "perishell::newton::translationDot", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes_),
       KOKKOS_LAMBDA(const LocalIndex node, double& sum) {
+        if (!owned(node)) return;
         auto pick = [&](int which, int d) {
           return which == 0   ? dr(node, d)
                  : which == 1 ? dt(node, d)
@@ -772,7 +859,7 @@ double StaticNewtonSolver<ExecutionSpaceT>::translationDot(int first, int second
         for (int d = 0; d < 3; ++d) sum += pick(first, d) * pick(second, d);
       },
       dot);
-  return dot;
+  return communicator().sum(dot);
 }
 
 template <class ExecutionSpaceT>
@@ -886,6 +973,65 @@ void StaticNewtonSolver<ExecutionSpaceT>::markConstrainedDofs() {
       KOKKOS_LAMBDA(const LocalIndex node) {
         for (int d = 0; d < 6; ++d) flags(6 * std::size_t(node) + d) = (constrained(node) & (1u << d)) != 0;
       });
+}
+
+template <class ExecutionSpaceT>
+auto StaticNewtonSolver<ExecutionSpaceT>::preconditionerMatrix(const Matrix& K) -> Matrix {
+  if (!rows_) return K;
+  if (preconditionerValues_.extent(0) != K.values.extent(0))
+    preconditionerValues_ = VectorView<Memory>("perishell::newton::preconditionerValues", K.values.extent(0));
+  const auto rowMap = K.graph.row_map;
+  const auto columns = K.graph.entries;
+  const auto values = K.values;
+  const auto blockValues = preconditionerValues_;
+  const auto owned = rows_->owned;
+  Kokkos::parallel_for(
+      "perishell::newton::ownedBlock", Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, K.numRows()),
+      KOKKOS_LAMBDA(const LocalIndex row) {
+        for (auto entry = rowMap(row); entry < rowMap(row + 1); ++entry) {
+          const LocalIndex column = columns(entry);
+          blockValues(entry) = owned(row) ? (owned(column) ? values(entry) : 0.0) : (column == row ? 1.0 : 0.0);
+        }
+      });
+  return Matrix("perishell::newton::ownedBlock", K.numRows(), K.numCols(), K.nnz(), blockValues, rowMap, columns);
+}
+
+template <class ExecutionSpaceT>
+void StaticNewtonSolver<ExecutionSpaceT>::fillHalo(const VectorView<Memory>& vector) {
+  if (!distribution_.distributed()) return;
+  space_.fence();
+  distribution_.exchange(space_, pd::NodalVectorView<Memory>(vector.data(), vector.extent(0) / 6));
+}
+
+template <class ExecutionSpaceT>
+template <class Build>
+void StaticNewtonSolver<ExecutionSpaceT>::onEveryRank(const char* what, Build&& build) {
+  if (!distribution_.distributed()) {
+    build();
+    return;
+  }
+  std::exception_ptr failure;
+  try {
+    build();
+  } catch (...) {
+    failure = std::current_exception();
+  }
+  const int mine = detail::failureCode(failure);
+  const int agreed = communicator().max(mine);
+  if (agreed == 0) return;
+  // The root's message reaches the user through the run's error; another rank's, here.
+  if (failure && !communicator().root()) {
+    try {
+      std::rethrow_exception(failure);
+    } catch (const std::exception& error) {
+      std::fprintf(stderr, "perishell (rank %d of %d): %s failed: %s\n", communicator().rank(), communicator().size(),
+                   what, error.what());
+    }
+  }
+  if (mine == agreed) std::rethrow_exception(failure);
+  const std::string elsewhere = std::string(what) + " failed on another rank (its message is on standard error)";
+  if (agreed == 4) throw std::runtime_error(elsewhere);
+  throw direct::FactorizationError(static_cast<direct::FactorizationError::Kind>(agreed - 1), elsewhere);
 }
 
 template <class ExecutionSpaceT>

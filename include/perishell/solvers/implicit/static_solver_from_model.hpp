@@ -5,6 +5,7 @@
 #include <perishell/coupling/make_coupled_model.hpp>
 #include <perishell/model/model.hpp>
 #include <perishell/solvers/implicit/static_newton.hpp>
+#include <perishell/solvers/local_model.hpp>
 #include <perishell/solvers/model_actions.hpp>
 
 #include <functional>
@@ -26,17 +27,9 @@ bool appliesMoments(const ExternalActions<MemorySpaceT>& actions) {
   return false;
 }
 
-// adjust, where given, changes the options the deck gave (the Newton settings no deck key
-// reaches, e.g. auto's thresholds in tests).
-template <class ExecutionSpaceT>
-StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& space, const model::Model& model,
-                                                     const std::function<void(NewtonOptions&)>& adjust = {}) {
-  requireImplicitModel(model);
-  using Memory = typename ExecutionSpaceT::memory_space;
-  const auto& deck = model.deck;
-  const auto& settings = deck.solver.implicitSettings;
-  // Shell elements where the model is CCM or in the transition, bonds where alpha > 0 (model.md §4).
-  const auto bodies = coupling::makeCoupledBodies(space, model);
+// The deck's Newton settings; momentsApplied: whether any load has a moment component (on any rank).
+inline NewtonOptions newtonOptions(const model::Model& model, bool momentsApplied) {
+  const auto& settings = model.deck.solver.implicitSettings;
   NewtonOptions options;
   options.maxIterations = settings.maxIterations;
   options.tolerance = settings.tolerance;
@@ -46,14 +39,37 @@ StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& spac
   options.arcLengthFirstStep = 1.0 / settings.increments;
   options.amgReuseGrowth = settings.amgReuse;
   options.preconditioner = settings.preconditioner;
-  auto actions = makeExternalActions<Memory>(model);
-  options.tangent = settings.tangent == deck::Tangent::Exact ||
-                            (settings.tangent == deck::Tangent::Auto && appliesMoments(actions))
+  options.tangent = settings.tangent == deck::Tangent::Exact || (settings.tangent == deck::Tangent::Auto && momentsApplied)
                         ? TangentForm::Exact
                         : TangentForm::Symmetric;
+  return options;
+}
+
+// adjust, where given, changes the options the deck gave (the Newton settings no deck key
+// reaches, e.g. auto's thresholds in tests).
+template <class ExecutionSpaceT>
+StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& space, const model::Model& model,
+                                                     const std::function<void(NewtonOptions&)>& adjust = {}) {
+  requireImplicitModel(model);
+  using Memory = typename ExecutionSpaceT::memory_space;
+  // Shell elements where the model is CCM or in the transition, bonds where alpha > 0 (model.md §4).
+  const auto bodies = coupling::makeCoupledBodies(space, model);
+  auto actions = makeExternalActions<Memory>(model);
+  NewtonOptions options = newtonOptions(model, appliesMoments(actions));
   if (adjust) adjust(options);
   return StaticNewtonSolver<ExecutionSpaceT>(space, model.shell.mesh.numNodes(), bodies.shellElements(),
                                              bodies.bondCarriers(), std::move(actions), options);
+}
+
+// The solver of this rank's part of a distributed run (solvers/local_model.hpp). Collective.
+template <class ExecutionSpaceT>
+StaticNewtonSolver<ExecutionSpaceT> makeStaticSolver(const ExecutionSpaceT& space, const model::Model& model,
+                                                     const LocalModel<ExecutionSpaceT>& local) {
+  requireImplicitModel(model);
+  const auto& communicator = local.distribution.communicator();
+  const NewtonOptions options = newtonOptions(model, communicator.any(appliesMoments(local.actions)));
+  return StaticNewtonSolver<ExecutionSpaceT>(space, local.domain.numNodes(), local.bodies.shellElements(),
+                                             local.bodies.bondCarriers(), local.actions, options, local.distribution);
 }
 
 }  // namespace perishell::solvers
