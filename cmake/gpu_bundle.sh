@@ -20,13 +20,15 @@ for b in "$out"/bin/*; do ldd "$b"; done | awk '$3 ~ /^\// {print $3}' | sort -u
   # An MPI build (cuda-mpi) uses the GPU machine's Open MPI 4.1 and NCCL (same sonames; its
   # mpirun must start the ranks with its own runtime and transports): never copied.
   grep -vE '/(libmpi|libopen-(rte|pal)|libnccl|libhwloc|libevent|libpmix|libuc[mpst]|libfabric|libibverbs|librdmacm|libpsm|libnl-|libmunge)[^/]*\.so' |
+  # cuSOLVER, cuSPARSE and cuBLAS (hundreds of MB): the GPU machine's CUDA 13 toolkit has them.
+  grep -vE '/lib(cusolver|cusparse|cublas|cublasLt|nvJitLink)\.so' |
   while read -r lib; do cp -L "$lib" "$out/lib/"; done
 cp -r "$(dirname "${BASH_SOURCE[0]}")/../tests/data" "$out/data"
 cat > "$out/run-tests.sh" <<'SCRIPT'
 #!/usr/bin/env bash
 # Runs every test binary of the bundle (CUDA and OpenMP categories); exit 1 if any fails.
 cd "$(dirname "$0")"
-export LD_LIBRARY_PATH="$PWD/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+export LD_LIBRARY_PATH="$PWD/lib:/usr/local/cuda/lib64${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
 export PERISHELL_TEST_DATA_DIR="$PWD/data"
 failed=0
 for t in bin/*_test_*; do

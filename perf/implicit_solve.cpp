@@ -12,6 +12,7 @@
 // (model.md §7), printed beside the true number of free DOF.
 //
 // Usage: perishell_perf_implicit_solve [--csv] [--repeats R] [--preconditioner NAME]
+//                                      [--factorization auto|host|device]
 //                                      [--models ccm,pd] [--newton N] [spacing_mm...]
 //   defaults: 5 repeats, preconditioner amg, models ccm and pd, spacings 0.5 0.25 0.1 mm; with
 //   cholesky or direct the increment ends with a factorization of its converged tangent (the
@@ -36,6 +37,7 @@ struct Options {
   bool csv = false;
   int repeats = 5;
   std::string preconditioner = "amg";
+  std::string factorization = "auto";  // solver.factorization: where a GPU run factors
   std::vector<std::string> models{"ccm", "pd"};
   std::vector<double> spacingsMm{0.5, 0.25, 0.1};
   int newtonIterations = 0;  // 0: the whole first increment
@@ -44,7 +46,7 @@ struct Options {
 [[noreturn]] void usage(const char* program, const std::string& problem) {
   std::fprintf(stderr,
                "error: %s\nusage: %s [--csv] [--repeats R] [--preconditioner jacobi|block-jacobi|amg|cholesky|direct|auto] "
-               "[--models ccm,pd] [--newton N] [spacing_mm...]\n",
+               "[--factorization auto|host|device] [--models ccm,pd] [--newton N] [spacing_mm...]\n",
                problem.c_str(), program);
   std::exit(2);
 }
@@ -64,6 +66,8 @@ Options parseArguments(int argc, char* argv[]) {
       if (options.newtonIterations < 1) usage(argv[0], "--newton needs a count of at least 1");
     } else if (argument == "--preconditioner" && hasValue) {
       options.preconditioner = argv[++a];
+    } else if (argument == "--factorization" && hasValue) {
+      options.factorization = argv[++a];
     } else if (argument == "--models" && hasValue) {
       options.models.clear();
       std::string list = argv[++a];
@@ -87,7 +91,7 @@ Options parseArguments(int argc, char* argv[]) {
 
 // The deck of example 4.2.1 with the whole plate CCM or PD (model.md §7).
 perishell::model::Model pressedPlate(double spacing, const std::string& zone, const std::string& preconditioner,
-                                     int maxIterations) {
+                                     const std::string& factorization, int maxIterations) {
   const std::string text = R"(perishell:
   version: 1
   mesh: {generator: plate, length-x: 0.090, length-y: 0.030, spacing: )" +
@@ -98,7 +102,7 @@ perishell::model::Model pressedPlate(double spacing, const std::string& zone, co
   loads: {pressure: {type: pressure, value: 1.0e6}}
   solver: {type: implicit, increments: 100, max-iterations: )" +
                            std::to_string(maxIterations) + R"(, tolerance: 1.0e-8, preconditioner: )" + preconditioner +
-                           R"(}
+                           ", factorization: " + factorization + R"(}
 )";
   return perishell::model::buildModel(perishell::parseDeck(text, "pressed_plate.yaml"));
 }
@@ -135,7 +139,7 @@ int main(int argc, char* argv[]) {
   for (const auto& zone : options.models)
     for (const double spacingMm : options.spacingsMm) {
       const int maxIterations = options.newtonIterations > 0 ? options.newtonIterations : 100;
-      const auto model = pressedPlate(spacingMm * 1e-3, zone, options.preconditioner, maxIterations);
+      const auto model = pressedPlate(spacingMm * 1e-3, zone, options.preconditioner, options.factorization, maxIterations);
       auto solver = perishell::solvers::makeStaticSolver(ExecutionSpace{}, model);
       const double assemblySeconds = perishell::perf::medianSeconds(options.repeats, [&] { solver.assembleTangent(); });
       perishell::solvers::IncrementReport report;

@@ -9,10 +9,12 @@ preconditioner and Newton format (solver.newton); the table gives wall time, inc
 factorizations (medians over --repeats runs for the time).
 
   perf/shell_benchmarks.py --app build/openmp/apps/perishell --out OUT [--cases slit,hemisphere,roof]
-                           [--preconditioners amg,cholesky,direct] [--newton mixed,displacement]
+                           [--preconditioners amg,cholesky,direct,cholesky@host,cholesky@device]
+                           [--newton mixed,displacement]
                            [--repeats 3] [--backend host|device]
 
-Writes OUT/<case>/ (mesh, deck, runs) and OUT/shell_benchmarks.md.
+A preconditioner written NAME@PLACE also sets solver.factorization (host or device: where a
+GPU run factors the tangent). Writes OUT/<case>/ (mesh, deck, runs) and OUT/shell_benchmarks.md.
 """
 import argparse
 import csv
@@ -276,7 +278,7 @@ def run(app, deck_path, backend, log_path):
             "cuts": number(r"increments +[0-9 of]+\(([0-9]+) cuts"),
             "newton": number(r"Newton iterations +([0-9]+)"),
             "krylov": number(r"linear iterations +([0-9]+)"),
-            "factorizations": number(r"\(([0-9]+) factorizations\)"),
+            "factorizations": number(r"\(([0-9]+) factorizations[,)]"),
             "builds": number(r"\(([0-9]+) AMG builds\)"),
             "max_u": number(r"max displacement +([0-9.e+-]+) m"),
             "limit": "yes" if "tangent             lost positive definiteness" in text else "no",
@@ -307,10 +309,12 @@ def main():
         linear = LINEAR_CASES.get(case)
         template = linear[0](directory, args.scale, linear[4]) if linear else CASES[case](directory, args.scale)
         for preconditioner, newton in itertools.product(args.preconditioners.split(","), args.newton.split(",")):
-            name = f"{preconditioner}-{newton}"
+            name = f"{preconditioner.replace('@', '-')}-{newton}"
             deck_path = os.path.join(directory, f"{name}.yaml")
+            kind, _, place = preconditioner.partition("@")
+            setting = kind + (f", factorization: {place}" if place else "")
             with open(deck_path, "w") as f:
-                f.write(template.replace("PRECONDITIONER", preconditioner).replace("NEWTON", newton).replace(
+                f.write(template.replace("PRECONDITIONER", setting).replace("NEWTON", newton).replace(
                     "directory: out", f"directory: out-{name}"))
             runs = [run(args.app, deck_path, args.backend, os.path.join(directory, f"{name}-{r}.log"))
                     for r in range(args.repeats)]

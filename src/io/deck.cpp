@@ -699,7 +699,8 @@ deck::Solver readSolver(const Section& section) {
                                               "damping", "shell-element", "hourglass"};
   const std::vector<std::string> implicitKeys{"type", "increments", "max-iterations", "tolerance",
                                               "preconditioner", "max-cuts", "tangent", "amg-reuse",
-                                              "line-search", "control", "max-increments", "newton"};
+                                              "line-search", "control", "max-increments", "newton",
+                                              "factorization"};
   std::vector<std::string> allKeys = explicitKeys;
   allKeys.insert(allKeys.end(), implicitKeys.begin() + 1, implicitKeys.end());
   section.allowOnly(allKeys);
@@ -759,6 +760,10 @@ deck::Solver readSolver(const Section& section) {
          {"direct", deck::Preconditioner::Direct},
          {"auto", deck::Preconditioner::Auto}},
         settings.preconditioner);
+    settings.factorization = section.choice<deck::Factorization>(
+        "factorization",
+        {{"auto", deck::Factorization::Auto}, {"host", deck::Factorization::Host}, {"device", deck::Factorization::Device}},
+        settings.factorization);
     settings.tangent = section.choice<deck::Tangent>(
         "tangent",
         {{"auto", deck::Tangent::Auto}, {"symmetric", deck::Tangent::Symmetric}, {"exact", deck::Tangent::Exact}},

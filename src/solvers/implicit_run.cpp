@@ -150,7 +150,7 @@ const char* preconditionerName(deck::Preconditioner preconditioner) {
     case deck::Preconditioner::Jacobi: return "Jacobi";
     case deck::Preconditioner::BlockJacobi: return "6x6 block-Jacobi";
     case deck::Preconditioner::Amg: return "smoothed-aggregation AMG";
-    case deck::Preconditioner::Cholesky: return "sparse Cholesky (CHOLMOD)";
+    case deck::Preconditioner::Cholesky: return "sparse Cholesky";
     case deck::Preconditioner::Direct: return "direct (Cholesky per iteration)";
     case deck::Preconditioner::Auto: return "auto";
   }
@@ -443,7 +443,11 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
                                         ? " (" + std::to_string(summary.preconditionerBuilds) + " AMG builds)"
                                         : std::string()) +
                                    (summary.factorizations > 0
-                                        ? " (" + std::to_string(summary.factorizations) + " factorizations)"
+                                        ? " (" + std::to_string(summary.factorizations) + " factorizations" +
+                                              (solver.factorizationPlace().empty()
+                                                   ? std::string()
+                                                   : ", the last on the " + solver.factorizationPlace()) +
+                                              ")"
                                         : std::string()))
       .add("  linear solve", formatNumber(phases.linearSolve) + " s")
       .add("  update", formatNumber(phases.update) + " s")

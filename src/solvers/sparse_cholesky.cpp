@@ -131,6 +131,14 @@ void SparseCholesky::setPattern(LocalIndex n, const RowOffset* rowMap, const Loc
   for (std::size_t k = 0; k < m.slot.size(); ++k) rows[k] = columns[m.slot[k]];
 }
 
+std::vector<LocalIndex> SparseCholesky::fillReducingOrdering() {
+  auto& m = *impl_;
+  if (m.lower == nullptr) throw std::logic_error("perishell::direct::SparseCholesky: ordering before setPattern");
+  if (m.supernodal == nullptr) m.supernodal = m.analyse(CHOLMOD_SUPERNODAL);
+  const auto* perm = static_cast<const Long*>(m.supernodal->Perm);
+  return std::vector<LocalIndex>(perm, perm + m.n);
+}
+
 FactorizationInfo SparseCholesky::factorize(const double* values) {
   auto& m = *impl_;
   if (m.lower == nullptr) throw std::logic_error("perishell::direct::SparseCholesky: factorize before setPattern");

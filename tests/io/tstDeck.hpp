@@ -282,6 +282,7 @@ perishell:
     tangent: exact
     amg-reuse: 2.0
     newton: displacement
+    factorization: host
   output:
     directory: /tmp/perishell-results
     every: 10
@@ -358,6 +359,7 @@ perishell:
   EXPECT_EQ(deck.solver.implicitSettings.tangent, deck::Tangent::Exact);
   EXPECT_DOUBLE_EQ(deck.solver.implicitSettings.amgReuse, 2.0);
   EXPECT_EQ(deck.solver.implicitSettings.newton, deck::ImplicitSettings::Newton::Displacement);
+  EXPECT_EQ(deck.solver.implicitSettings.factorization, deck::Factorization::Host);
 
   EXPECT_EQ(deck.output.directory, "/tmp/perishell-results");  // absolute stays
   EXPECT_EQ(deck.output.every, 10);
@@ -600,6 +602,8 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
        {"'skew' is not one of auto, symmetric, exact"}},
       {"unknown newton format", {{"    increments: 10\n", "    increments: 10\n    newton: modified\n"}},
        "solver.newton", {"'modified' is not one of mixed, displacement"}},
+      {"unknown factorization place", {{"    increments: 10\n", "    increments: 10\n    factorization: gpu\n"}},
+       "solver.factorization", {"'gpu' is not one of auto, host, device"}},
       {"amg reuse below 1", {{"    increments: 10\n", "    increments: 10\n    amg-reuse: 0.5\n"}}, "solver.amg-reuse",
        {"must be 0 (rebuild the multigrid hierarchy at every Newton iteration) or a growth factor in [1, 100], got 0.5"}},
       {"unknown generator", {{"generator: plate", "generator: disc"}}, "mesh.generator",

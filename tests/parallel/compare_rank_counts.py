@@ -15,6 +15,8 @@ each rank count.
 
 usage: compare_rank_counts.py --app PERISHELL --mpirun MPIRUN --deck DECK --work DIR [--ranks 1,2,3]
                               [--relative-tolerance TOL]
+       compare_rank_counts.py --compare-only --deck DECK --work DIR [...]: compares the
+                              directories DIR/ranks-N another machine wrote (a GPU run).
 """
 import argparse
 import csv
@@ -53,21 +55,27 @@ def datasets(directory):
 
 def main():
     parser = argparse.ArgumentParser()
-    parser.add_argument("--app", required=True)
-    parser.add_argument("--mpirun", required=True)
+    parser.add_argument("--app")
+    parser.add_argument("--mpirun")
+    parser.add_argument("--compare-only", action="store_true")
     parser.add_argument("--deck", required=True)
     parser.add_argument("--work", required=True)
     parser.add_argument("--ranks", default="1,2,3")
     parser.add_argument("--relative-tolerance", type=float, default=None)
     args = parser.parse_args()
     counts = [int(r) for r in args.ranks.split(",")]
-    shutil.rmtree(args.work, ignore_errors=True)
-    os.makedirs(args.work)
+    if not args.compare_only:
+        if not args.app or not args.mpirun:
+            parser.error("--app and --mpirun are needed unless --compare-only")
+        shutil.rmtree(args.work, ignore_errors=True)
+        os.makedirs(args.work)
     outputs = {}
     for ranks in counts:
         directory = os.path.join(args.work, f"ranks-{ranks}")
-        log = run(args.app, args.mpirun, args.deck, ranks, directory)
         outputs[ranks] = directory
+        if args.compare_only:
+            continue
+        log = run(args.app, args.mpirun, args.deck, ranks, directory)
         partition = [line for line in log.splitlines() if line.startswith("partition:") or "imbalance" in line]
         print(f"{ranks} rank(s): {' '.join(partition) if partition else 'one rank'}")
 

@@ -3,7 +3,8 @@
 // shifted matrix, so the count of negative L D L^T pivots is known exactly (Sylvester's law
 // of inertia); solves against A x = b; the factor of a non-symmetric matrix is that of its
 // symmetric part; a singular matrix and a non-symmetric pattern are refused; and as a Belos
-// preconditioner on the backend, PCG converges in one iteration on a fresh factor.
+// preconditioner on the backend (on a GPU factored on the device when asked, and on the host
+// where the matrix is indefinite), PCG converges in one iteration on a fresh factor.
 #include <perishell/solvers/belos/cg_solve.hpp>
 #include <perishell/solvers/direct/factorization_preconditioner.hpp>
 
@@ -11,6 +12,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace perishell_test_sparse_cholesky {
@@ -176,26 +178,76 @@ TEST(TEST_CATEGORY, sparse_cholesky_refuses_singular_matrices_and_unsymmetric_pa
   }
 }
 
+// Where the factor lives: on the GPU the device factorization when asked for, else the host's.
+template <class ExecutionSpaceT>
+bool factorOnDevice(bool asked) {
+#if defined(KOKKOS_ENABLE_CUDA)
+  return asked && std::is_same_v<ExecutionSpaceT, Kokkos::Cuda>;
+#else
+  (void)asked;
+  return false;
+#endif
+}
+
 TEST(TEST_CATEGORY, factorization_preconditioned_cg_converges_in_one_iteration) {
   using namespace perishell_test_sparse_cholesky;
   using Memory = TEST_EXECSPACE::memory_space;
-  const HostCrs host = shiftedLaplacian(40, -0.01);  // SPD, condition ~ 800
+  // SPD, condition ~ 800.
+  const HostCrs host = shiftedLaplacian(40, -0.01);
   const auto A = onBackend<TEST_EXECSPACE>(host);
-  perishell::direct::FactorizationPreconditioner<TEST_EXECSPACE> factor(A);
-  const auto info = factor.factorize(A);
-  EXPECT_TRUE(info.positiveDefinite);
+  for (const bool onDevice : {false, true}) {
+    perishell::direct::FactorizationPreconditioner<TEST_EXECSPACE> factor(A, onDevice);
+    const auto info = factor.factorize(A);
+    EXPECT_TRUE(info.positiveDefinite);
+    EXPECT_EQ(factor.factoredOnDevice(), factorOnDevice<TEST_EXECSPACE>(onDevice));
 
-  const auto exact = testVector(host.numRows());
-  const auto rhs = multiply(host, exact);
-  perishell::VectorView<Memory> b("b", rhs.size()), x("x", rhs.size());
-  Kokkos::deep_copy(b, Kokkos::View<const double*, Kokkos::HostSpace>(rhs.data(), rhs.size()));
-  perishell::belos::CgOptions options;
-  options.tolerance = 1e-12;
-  options.maxIterations = 50;
-  const auto result =
-      perishell::belos::solveCg<TEST_EXECSPACE>(A, b, x, options, Teuchos::rcp(&factor, false));
-  EXPECT_TRUE(result.converged);
-  EXPECT_LE(result.iterations, 2);
-  const auto xHost = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, x);
-  EXPECT_LT(relativeDifference(std::vector<double>(xHost.data(), xHost.data() + xHost.extent(0)), exact), 1e-10);
+    const auto exact = testVector(host.numRows());
+    const auto rhs = multiply(host, exact);
+    perishell::VectorView<Memory> b("b", rhs.size()), x("x", rhs.size());
+    Kokkos::deep_copy(b, Kokkos::View<const double*, Kokkos::HostSpace>(rhs.data(), rhs.size()));
+    perishell::belos::CgOptions options;
+    options.tolerance = 1e-12;
+    options.maxIterations = 50;
+    const auto result =
+        perishell::belos::solveCg<TEST_EXECSPACE>(A, b, x, options, Teuchos::rcp(&factor, false));
+    EXPECT_TRUE(result.converged) << "onDevice " << onDevice;
+    EXPECT_LE(result.iterations, 2) << "onDevice " << onDevice;
+    const auto xHost = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, x);
+    EXPECT_LT(relativeDifference(std::vector<double>(xHost.data(), xHost.data() + xHost.extent(0)), exact), 1e-10)
+        << "onDevice " << onDevice;
+  }
+}
+
+// The device factorization (L L^T only) leaves an indefinite matrix to the host's L D L^T,
+// which counts its negative eigenvalues; the next positive definite matrix goes back to the
+// device. A non-symmetric matrix is factored by its symmetric part on either side.
+TEST(TEST_CATEGORY, factorization_preconditioner_factors_indefinite_and_non_symmetric_matrices) {
+  using namespace perishell_test_sparse_cholesky;
+  const int m = 30;
+  const double shift = 1.3;
+  const auto indefinite = onBackend<TEST_EXECSPACE>(shiftedLaplacian(m, shift));
+  const auto definite = onBackend<TEST_EXECSPACE>(shiftedLaplacian(m, 0.0, 0.3));
+  const HostCrs symmetricPart = shiftedLaplacian(m, 0.0);
+  for (const bool onDevice : {false, true}) {
+    perishell::direct::FactorizationPreconditioner<TEST_EXECSPACE> factor(indefinite, onDevice);
+    const auto info = factor.factorize(indefinite);
+    EXPECT_FALSE(info.positiveDefinite);
+    EXPECT_EQ(info.negativePivots, eigenvaluesBelow(m, shift)) << "onDevice " << onDevice;
+    EXPECT_FALSE(factor.factoredOnDevice());
+
+    EXPECT_TRUE(factor.factorize(definite).positiveDefinite);
+    EXPECT_EQ(factor.factoredOnDevice(), factorOnDevice<TEST_EXECSPACE>(onDevice));
+    // One application of the factor solves the symmetric part exactly.
+    const auto exact = testVector(symmetricPart.numRows());
+    const auto rhs = multiply(symmetricPart, exact);
+    perishell::belos::KokkosMultiVector<TEST_EXECSPACE> b("b", std::ptrdiff_t(rhs.size()), 1),
+        x("x", std::ptrdiff_t(rhs.size()), 1);
+    Kokkos::deep_copy(Kokkos::subview(b.view(), Kokkos::ALL(), 0),
+                      Kokkos::View<const double*, Kokkos::HostSpace>(rhs.data(), rhs.size()));
+    factor.Apply(b, x);
+    const auto xHost = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, x.view());
+    std::vector<double> solution(rhs.size());
+    for (std::size_t i = 0; i < solution.size(); ++i) solution[i] = xHost(i, 0);
+    EXPECT_LT(relativeDifference(solution, exact), 1e-12) << "onDevice " << onDevice;
+  }
 }

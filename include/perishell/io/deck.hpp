@@ -174,6 +174,10 @@ enum class SolverType { Explicit, Implicit };
 // Cholesky factorization of a recent tangent; Direct refactors at every Newton iteration; Auto
 // picks Cholesky or Amg by size and by the iterations AMG needs (solvers::NewtonOptions).
 enum class Preconditioner { Jacobi, BlockJacobi, Amg, Cholesky, Direct, Auto };
+// Where a GPU run factors its tangent (Cholesky, Direct): on the device (cuSOLVER), on the
+// host (CHOLMOD, vectors cross PCIe at each application), or Auto (solvers::NewtonOptions).
+// Host runs always factor on the host.
+enum class Factorization { Auto, Host, Device };
 // Auto: Exact where the model applies moments, else Symmetric (TangentForm, core/types.hpp).
 enum class Tangent { Auto, Symmetric, Exact };
 
@@ -194,6 +198,7 @@ struct ImplicitSettings {
   int maxIterations = 100;
   double tolerance = 1e-8;  // Newton: residual norm relative to the external load norm
   Preconditioner preconditioner = Preconditioner::Auto;
+  Factorization factorization = Factorization::Auto;
   int maxCuts = 8;  // bisections of an increment Newton fails on, before the run stops
   Tangent tangent = Tangent::Auto;
   // Newton reuses the AMG hierarchy while its Krylov iterations stay within this factor of

@@ -18,6 +18,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace perishell::direct {
 
@@ -62,6 +63,10 @@ class SparseCholesky {
   // diagonal entry present). Throws std::invalid_argument when it is not.
   void setPattern(LocalIndex n, const RowOffset* rowMap, const LocalIndex* columns);
   bool hasPattern() const;
+
+  // The fill-reducing elimination order CHOLMOD chose for the pattern (entry k: the row
+  // eliminated k-th), analysed once and kept for factorize(). For a device factorization.
+  std::vector<LocalIndex> fillReducingOrdering();
 
   // Factors (A + A^T) / 2 with A's values in the pattern's CRS order. Throws
   // FactorizationError when no factor could be made (the previous one is then gone); a

@@ -105,6 +105,15 @@ struct NewtonOptions {
   // 8.9 Krylov iterations per Newton iteration, 91 factorizations for 116 iterations; with
   // 8 and 4x: 13.8 and 77, the same wall time).
   int factorRefreshIterations = 5;
+  // Where a GPU run factors (deck solver.factorization, direct/factorization_preconditioner.hpp);
+  // Auto: on the device from autoDeviceFactorizationRows rows of the factored matrix, on the
+  // host below. Measured on an H100 (docs/implicit.md, "Device factorization"): cuSOLVER's
+  // csrchol factors faster than CHOLMOD but its triangular solves are slow, so per Newton
+  // iteration of the pressed plate 4.2.1 it loses at 65,880 free DOF (0.92 s against 0.73 s),
+  // wins at 261,360 (3.3 s against 4.3 s) and at 1.6 M (18 s against 51 s); on the curved
+  // shells of a few thousand DOF the host is 1.3-2.7x faster over a whole run.
+  deck::Factorization factorization = deck::Factorization::Auto;
+  long long autoDeviceFactorizationRows = 150000;
   // Symmetric: PCG, quadratic convergence where no moment is applied. Exact: GMRES with the
   // non-symmetric tangent, which stays quadratic under applied (fixed-axis) moments; with
   // the symmetric one Newton converges linearly there and fails past the half circle of
@@ -208,6 +217,12 @@ class StaticNewtonSolver {
 
   // The preconditioner in use (Auto resolved).
   deck::Preconditioner activePreconditioner() const { return active_; }
+  // Where the last factorization ran (NewtonOptions::factorization): "device (cuSOLVER)",
+  // "host (CHOLMOD)", or empty before the first.
+  std::string factorizationPlace() const {
+    if (!factor_) return {};
+    return factor_->factoredOnDevice() ? "device (cuSOLVER)" : "host (CHOLMOD)";
+  }
   long long numFreeDofs() const { return freeDofs_; }
   TangentForm tangentForm() const { return options_.tangent; }
 

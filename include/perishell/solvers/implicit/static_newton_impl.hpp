@@ -635,11 +635,15 @@ template <class ExecutionSpaceT>
 direct::FactorizationInfo StaticNewtonSolver<ExecutionSpaceT>::factorize(const Matrix& K, IncrementReport& report) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
-  if (!factor_) factor_ = std::make_unique<direct::FactorizationPreconditioner<ExecutionSpaceT>>(K);
   factorCurrent_ = false;  // a failed factorization leaves none
   direct::FactorizationInfo info;
   onEveryRank("the Cholesky factorization", [&] {
     try {
+      if (!factor_)
+        factor_ = std::make_unique<direct::FactorizationPreconditioner<ExecutionSpaceT>>(
+            K, options_.factorization == deck::Factorization::Device ||
+                   (options_.factorization == deck::Factorization::Auto &&
+                    K.numRows() >= options_.autoDeviceFactorizationRows));
       info = factor_->factorize(preconditionerMatrix(K));
     } catch (const direct::FactorizationError& error) {
       if (error.kind() != direct::FactorizationError::Kind::Singular || error.row() < 0) throw;

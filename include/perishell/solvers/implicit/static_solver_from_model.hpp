@@ -39,6 +39,7 @@ inline NewtonOptions newtonOptions(const model::Model& model, bool momentsApplie
   options.arcLengthFirstStep = 1.0 / settings.increments;
   options.amgReuseGrowth = settings.amgReuse;
   options.preconditioner = settings.preconditioner;
+  options.factorization = settings.factorization;
   options.tangent = settings.tangent == deck::Tangent::Exact || (settings.tangent == deck::Tangent::Auto && momentsApplied)
                         ? TangentForm::Exact
                         : TangentForm::Symmetric;
