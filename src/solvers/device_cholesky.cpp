@@ -85,8 +85,6 @@ struct DeviceCholesky::Impl {
 DeviceCholesky::DeviceCholesky() : impl_(std::make_unique<Impl>()) {}
 DeviceCholesky::~DeviceCholesky() = default;
 
-bool DeviceCholesky::hasFactor() const { return impl_->factored; }
-
 void DeviceCholesky::setPattern(LocalIndex n, const RowOffset* rowMap, const LocalIndex* columns,
                                 const std::vector<LocalIndex>& ordering) {
   auto& m = *impl_;

@@ -39,7 +39,6 @@ class DeviceCholesky {
   // info (and keeps no factor) when the matrix is not numerically positive definite; throws
   // FactorizationError when the device cannot hold the factor.
   std::optional<FactorizationInfo> factorize(const double* deviceValues);
-  bool hasFactor() const;
 
   // x = (L L^T)^{-1} b on the device; b and x hold n entries each and may alias.
   void solve(const double* deviceB, double* deviceX) const;
