@@ -557,8 +557,12 @@ deck::Zones readZones(const Section& section, double horizon) {
     if (zones.defaultKind == deck::ZoneKind::Pd)
       section.fail("adaptive", "needs default: ccm (with default: pd every element is already PD)");
     const Section block = section.sublist("adaptive");
-    block.allowOnly({"strain-fraction", "check-every"});
+    block.allowOnly({"strain-fraction", "check-every", "margin"});
     deck::AdaptiveZone adaptive;
+    adaptive.margin = block.number("margin", 2.0 * horizon);
+    if (!(adaptive.margin >= 0.0))
+      block.fail("margin", "must be >= 0 (the distance [m] around an element that turns PD within which the CCM "
+                           "elements turn PD with it), got " + formatNumber(adaptive.margin));
     adaptive.strainFraction = block.number("strain-fraction", adaptive.strainFraction);
     if (!(adaptive.strainFraction > 0.0 && adaptive.strainFraction <= 1.0))
       block.fail("strain-fraction", "must lie in (0, 1] (the share of the bonds' critical stretch s_c at which a "

@@ -377,7 +377,8 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   std::optional<coupling::AdaptivePdZone<ExecutionSpaceT>> adaptive;
   if (deck.zones.adaptive)
     adaptive.emplace(space, model.shell.mesh, checkpoint ? checkpointZone(*checkpoint, model) : model.elementIsPd,
-                     coupling::couplingInputs(model), deck.zones.adaptive->strainFraction);
+                     coupling::couplingInputs(model), deck.zones.adaptive->strainFraction,
+                     deck.zones.adaptive->margin);
   // A distributed run builds this rank's part only (solvers/local_model.hpp).
   std::optional<LocalModel<ExecutionSpaceT>> local;
   if (communicator.distributed()) local.emplace(makeLocalModel(space, model, communicator));
@@ -423,7 +424,8 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
                                 ": nothing is left to run (raise solver.steps or solver.end-time, or --max-steps)");
   if (adaptive)
     log << "adaptive PD zone: a CCM element turns PD when its surface strain reaches "
-        << deck.zones.adaptive->strainFraction << " x s_c = " << adaptive->threshold() << " (checked every "
+        << deck.zones.adaptive->strainFraction << " x s_c = " << adaptive->threshold()
+        << ", with the CCM elements within " << deck.zones.adaptive->margin << " m of it (checked every "
         << deck.zones.adaptive->checkEvery << " steps); " << model.numPdElements << " PD elements at the start\n";
   if (solver.timeStep() > solver.criticalTimeStep())
     log << "warning: solver.dt is " << solver.timeStep() / solver.criticalTimeStep()
@@ -477,7 +479,8 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
         ++switches;
         log << "adaptive PD zone: step " << step << " (t = " << solver.time() << " s): " << switched
             << " elements turned PD, now " << adaptive->numPdElements() - layerElements << " PD elements, "
-            << solver.body().bonds.numBonds() << " bonds, " << solver.numElements() << " shell elements\n";
+            << solver.body().bonds.numBonds() << " bonds, " << solver.numElements() << " shell elements; critical step "
+            << solver.criticalTimeStep() << " s (" << solver.lanczosProducts() << " force evaluations)\n";
       }
       adaptiveSeconds += fencedSecondsSince(space, checkStart);
     }

@@ -64,7 +64,7 @@ CrackRun runToTheEnd(const perishell::model::Model& model, double timeStep, int 
   std::optional<perishell::coupling::AdaptivePdZone<Space>> adaptive;
   if (model.deck.zones.adaptive)
     adaptive.emplace(space, model.shell.mesh, model.elementIsPd, perishell::coupling::couplingInputs(model),
-                     model.deck.zones.adaptive->strainFraction);
+                     model.deck.zones.adaptive->strainFraction, model.deck.zones.adaptive->margin);
   const auto bodies = adaptive ? adaptive->bodies() : perishell::coupling::makeCoupledBodies(space, model);
   perishell::solvers::ExplicitOptions options;
   options.density = model.deck.material.density;
@@ -171,6 +171,79 @@ TEST(TEST_CATEGORY, adaptive_zone_grows_ahead_of_the_crack_and_matches_the_pd_ru
   // edges, docs/explicit.md).
   EXPECT_LE(pdToAdaptive, 2.0 * spacing + 1e-12);
   EXPECT_LE(adaptiveToPd, 2.0 * spacing + 1e-12);
+}
+
+TEST(TEST_CATEGORY, adaptive_zone_margin_and_the_local_critical_step_after_a_switch) {
+  // A CCM glass plate, 20 x 10 mm, no pre-crack, so no PD at the start; delta = 2 dx, whose
+  // bonds vibrate faster than the shell elements: the first switch lowers the critical step.
+  // A stretch growing along x (eps_xx = 2 k x) reaches the threshold only near the right edge.
+  using namespace adaptive_zone_test;
+  using Space = TEST_EXECSPACE;
+  using Memory = TEST_MEMSPACE;
+  const auto model = perishell::model::buildModel(perishell::parseDeck(R"(perishell:
+  version: 1
+  mesh: {generator: plate, length-x: 0.020, length-y: 0.010, spacing: 0.5e-3}
+  material: {young-modulus: 72.0e9, poisson-ratio: 0.33, density: 2440.0, thickness: 1.0e-3, fracture-energy: 135.0}
+  peridynamics: {horizon-factor: 2}
+  zones: {default: ccm, adaptive: {strain-fraction: 0.5}}
+  loads: {pull: {type: edge-traction, set: right, value: 1.0e6}}
+  solver: {type: explicit, steps: 1}
+)", "plate.yaml"));
+  ASSERT_EQ(model.numPdElements, 0);
+  const Space space;
+  const auto& mesh = model.shell.mesh;
+  perishell::coupling::AdaptivePdZone<Space> narrow(space, mesh, model.elementIsPd,
+                                                    perishell::coupling::couplingInputs(model), 0.5, 0.0);
+  const double margin = model.deck.zones.adaptive->margin;
+  EXPECT_DOUBLE_EQ(margin, 2.0 * model.horizon());  // the deck's default
+  perishell::coupling::AdaptivePdZone<Space> wide(space, mesh, model.elementIsPd,
+                                                  perishell::coupling::couplingInputs(model), 0.5, margin);
+  perishell::pd::PdKinematics<Kokkos::HostSpace> host(mesh.numNodes());
+  const double k = narrow.threshold() / (2.0 * 0.016);  // eps_xx reaches the threshold at x = 16 mm
+  for (LocalIndex node = 0; node < mesh.numNodes(); ++node)
+    host.displacements(node, 0) = k * mesh.coordinates(node, 0) * mesh.coordinates(node, 0);
+  perishell::pd::PdKinematics<Memory> stretched(mesh.numNodes());
+  Kokkos::deep_copy(stretched.displacements, host.displacements);
+  Kokkos::deep_copy(stretched.rotations, host.rotations);
+
+  perishell::solvers::ExplicitOptions options;
+  options.density = model.deck.material.density;
+  options.thickness = model.deck.material.thickness;
+  perishell::solvers::CentralDifferenceSolver<Space> solver(space, narrow.bodies().pdBody,
+                                                            narrow.bodies().shellElements(),
+                                                            perishell::solvers::makeExternalActions<Memory>(model), options);
+  const double before = solver.criticalTimeStep();
+  const LocalIndex switched = narrow.update(stretched);
+  ASSERT_GT(switched, 0);
+  ASSERT_LT(switched, mesh.numElements() / 4);
+  solver.replaceBodies(narrow.bodies().pdBody, narrow.bodies().shellElements(), narrow.changedNodes());
+  const double local = solver.criticalTimeStep();
+  // A fresh solver over the grown bodies estimates over the whole model, 80 products at most.
+  const perishell::solvers::CentralDifferenceSolver<Space> fresh(
+      space, narrow.bodies().pdBody, narrow.bodies().shellElements(),
+      perishell::solvers::makeExternalActions<Memory>(model), options);
+  std::printf("%d elements switched; critical step before %.6e s, after: local %.6e s (%d products), global %.6e s\n",
+              int(switched), before, local, solver.lanczosProducts(), fresh.criticalTimeStep());
+  EXPECT_LT(fresh.criticalTimeStep(), 0.97 * before);  // the switch mattered
+  // Never above the global estimate by more than round-off; never far below it.
+  EXPECT_LE(local, fresh.criticalTimeStep() * (1.0 + 1e-4));
+  EXPECT_GE(local, fresh.criticalTimeStep() * 0.99);
+
+  // The margin: the wide zone holds exactly the narrow zone's new elements and every CCM
+  // element whose centre lies within the margin of one of theirs.
+  ASSERT_GT(wide.update(stretched), switched);
+  const auto centre = [&](LocalIndex e, int d) {
+    double sum = 0.0;
+    for (int a = 0; a < 4; ++a) sum += 0.25 * mesh.coordinates(mesh.quads(e, a), d);
+    return sum;
+  };
+  for (LocalIndex e = 0; e < model.numMeshElements(); ++e) {
+    bool near = narrow.elementIsPd()(e) != 0;
+    for (LocalIndex r = 0; r < model.numMeshElements() && !near; ++r)
+      near = narrow.elementIsPd()(r) && std::hypot(centre(e, 0) - centre(r, 0), centre(e, 1) - centre(r, 1)) <=
+                                            margin * (1.0 - 1e-9);
+    EXPECT_EQ(int(wide.elementIsPd()(e)), int(near)) << "element " << e;
+  }
 }
 
 TEST(TEST_CATEGORY, adaptive_zone_broken_bonds_survive_a_rebuilt_bond_list) {

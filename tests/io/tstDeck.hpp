@@ -931,11 +931,13 @@ TEST(TEST_CATEGORY, deck_zones_transition_defaults_values_and_rules) {
 
 TEST(TEST_CATEGORY, deck_zones_adaptive_values_and_rules) {
   const Edit explicitSolver{"    type: implicit\n    increments: 10\n", "    type: explicit\n    steps: 10\n"};
-  const Edit adaptiveZone{"    default: pd\n", "    default: ccm\n    adaptive: {strain-fraction: 0.3, check-every: 5}\n"};
+  const Edit adaptiveZone{"    default: pd\n",
+                          "    default: ccm\n    adaptive: {strain-fraction: 0.3, check-every: 5, margin: 4.0e-3}\n"};
   const Deck given = parseDeck(edited(baseDeck, {explicitSolver, adaptiveZone}), "adaptive.yaml");
   ASSERT_TRUE(given.zones.adaptive.has_value());
   EXPECT_DOUBLE_EQ(given.zones.adaptive->strainFraction, 0.3);
   EXPECT_EQ(given.zones.adaptive->checkEvery, 5);
+  EXPECT_DOUBLE_EQ(given.zones.adaptive->margin, 4.0e-3);
   EXPECT_TRUE(given.zones.hasPd());  // the nu <= 1/3 rule applies
   const Deck defaults = parseDeck(
       edited(baseDeck, {explicitSolver, {"    default: pd\n", "    default: ccm\n    adaptive: {check-every: 10}\n"}}),
@@ -943,6 +945,7 @@ TEST(TEST_CATEGORY, deck_zones_adaptive_values_and_rules) {
   ASSERT_TRUE(defaults.zones.adaptive.has_value());
   EXPECT_DOUBLE_EQ(defaults.zones.adaptive->strainFraction, 0.5);
   EXPECT_EQ(defaults.zones.adaptive->checkEvery, 10);
+  EXPECT_DOUBLE_EQ(defaults.zones.adaptive->margin, 2.0 * defaults.peridynamics.horizonFactor * defaults.mesh.spacing);
   EXPECT_FALSE(parseDeck(baseDeck, "plain.yaml").zones.adaptive.has_value());
   const std::vector<BadDeck> cases{
       {"fraction above 1", {explicitSolver, {"    default: pd\n", "    default: ccm\n    adaptive: {strain-fraction: 1.5}\n"}},
@@ -951,6 +954,8 @@ TEST(TEST_CATEGORY, deck_zones_adaptive_values_and_rules) {
        "zones.adaptive.strain-fraction", {"must lie in (0, 1]"}},
       {"check every 0", {explicitSolver, {"    default: pd\n", "    default: ccm\n    adaptive: {check-every: 0}\n"}},
        "zones.adaptive.check-every", {"must be >= 1"}},
+      {"negative margin", {explicitSolver, {"    default: pd\n", "    default: ccm\n    adaptive: {margin: -1.0e-3}\n"}},
+       "zones.adaptive.margin", {"must be >= 0", "got -0.001"}},
       {"unknown key", {explicitSolver, {"    default: pd\n", "    default: ccm\n    adaptive: {threshold: 0.5}\n"}},
        "zones.adaptive.threshold", {"unknown key"}},
       {"with default pd", {explicitSolver, {"    default: pd\n", "    default: pd\n    adaptive: {check-every: 5}\n"}},

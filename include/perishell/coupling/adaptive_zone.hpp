@@ -1,7 +1,10 @@
 #pragma once
 // The PD zone that grows with the load (issue 6, beyond the paper): a CCM element whose
 // largest surface strain reaches strainFraction x the bonds' critical stretch s_c (model.md
-// §3: 1/2 c_ax s_c^2 xi = w_c, so s_c = sqrt(2 w_c / (c_ax xi))) turns PD; the coupled
+// §3: 1/2 c_ax s_c^2 xi = w_c, so s_c = sqrt(2 w_c / (c_ax xi))) turns PD, and with it the
+// CCM elements whose centres lie within `margin` of its centre (2 delta by default, as the
+// seed around a pre-crack: a crack opens unbridged only beyond the transition, and the
+// zone grows in fewer, larger switches, each of which costs a rebuild); the coupled
 // bodies are rebuilt around the grown zone (alpha, bonds, hybrid sections;
 // coupling/make_coupled_model.hpp) and the solver carries its state over
 // (growPdZone below, CentralDifferenceSolver::replaceBodies). Elements only ever turn PD,
@@ -22,12 +25,13 @@ class AdaptivePdZone {
  public:
   using Memory = typename ExecutionSpaceT::memory_space;
 
-  // elementIsPd: the starting zone (copied). Throws std::invalid_argument without a fracture
-  // energy (there is no critical stretch) or with strainFraction outside (0, 1].
+  // elementIsPd: the starting zone (copied); margin [m]. Throws std::invalid_argument without a
+  // fracture energy (there is no critical stretch), with strainFraction outside (0, 1] or a
+  // negative margin.
   AdaptivePdZone(const ExecutionSpaceT& space, const mesh::HostQuadMesh& mesh,
                  const Kokkos::View<const std::uint8_t*, Kokkos::HostSpace>& elementIsPd, const CouplingInputs& inputs,
-                 double strainFraction)
-      : space_(space), mesh_(mesh), inputs_(inputs),
+                 double strainFraction, double margin)
+      : space_(space), mesh_(mesh), inputs_(inputs), margin_(margin),
         elementIsPd_("adaptive element is pd", elementIsPd.extent(0)) {
     if (!inputs.material.fractureEnergy)
       throw std::invalid_argument("adaptive PD zone: needs material.fracture-energy (the switch compares strains "
@@ -35,6 +39,8 @@ class AdaptivePdZone {
     if (!(strainFraction > 0.0 && strainFraction <= 1.0))
       throw std::invalid_argument("adaptive PD zone: the strain fraction must lie in (0, 1], got " +
                                   std::to_string(strainFraction));
+    if (!(margin >= 0.0))
+      throw std::invalid_argument("adaptive PD zone: the margin must be >= 0 m, got " + std::to_string(margin));
     Kokkos::deep_copy(elementIsPd_, elementIsPd);
     const auto& material = inputs.material;
     const double axial =
@@ -43,6 +49,7 @@ class AdaptivePdZone {
         2.0 * pd::criticalMicropotentialPerLength(*material.fractureEnergy, material.thickness, inputs.horizon) / axial);
     threshold_ = strainFraction * criticalStretch_;
     rebuild();
+    changedNodes_ = Kokkos::View<std::uint8_t*, Memory>("adaptive changed nodes", bodies_.alpha.extent(0));
   }
 
   const CoupledBodies<Memory>& bodies() const { return bodies_; }
@@ -64,25 +71,35 @@ class AdaptivePdZone {
       if (isPdNode[node]) nodes(k++) = node;
     return nodes;
   }
+  // Per mesh node, 1 where the last switch changed alpha: the bonds, hybrid sections and
+  // inertia changed there and nowhere else (the solver re-estimates its critical step there).
+  const Kokkos::View<std::uint8_t*, Memory>& changedNodes() const { return changedNodes_; }
   double criticalStretch() const { return criticalStretch_; }
   double threshold() const { return threshold_; }
 
-  // Switches every CCM element whose largest surface strain in `state` reaches the threshold
-  // to PD and rebuilds the bodies; returns how many switched (0: bodies unchanged).
+  // Switches every CCM element whose largest surface strain in `state` reaches the threshold,
+  // and every CCM element within the margin of one, to PD and rebuilds the bodies; returns how
+  // many switched (0: bodies unchanged) and marks changedNodes().
   LocalIndex update(const pd::PdKinematics<Memory>& state) {
     if (bodies_.shellBody.numElements() == 0) return 0;
     shell::computeLargestSurfaceStrain(space_, bodies_.shellBody, state, inputs_.material.thickness, strain_);
     if (countCandidates() == 0) return 0;
     const auto strain = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, strain_);
+    std::vector<LocalIndex> reached;  // shell body indices
+    for (std::size_t k = 0; k < bodies_.ccmElements.size(); ++k)
+      if (!elementIsPd_(bodies_.ccmElements[k]) && strain(k) >= threshold_) reached.push_back(k);
+    const auto near = withinMargin(reached);
     LocalIndex switched = 0;
     for (std::size_t k = 0; k < bodies_.ccmElements.size(); ++k) {
       const LocalIndex element = bodies_.ccmElements[k];
-      if (!elementIsPd_(element) && strain(k) >= threshold_) {
+      if (!elementIsPd_(element) && near(k) > 0.0) {
         elementIsPd_(element) = 1;
         ++switched;
       }
     }
+    const auto previousAlpha = bodies_.alpha;
     rebuild();
+    markChangedNodes(previousAlpha);
     return switched;
   }
 
@@ -100,7 +117,41 @@ class AdaptivePdZone {
     return count;
   }
 
+  // Public only because nvcc rejects extended lambdas in private member functions.
+  void markChangedNodes(const VectorView<Memory>& previousAlpha) {
+    const auto alpha = bodies_.alpha;
+    const auto changed = changedNodes_;
+    Kokkos::parallel_for(
+        "perishell::coupling::AdaptivePdZone::markChangedNodes",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, alpha.extent(0)),
+        KOKKOS_LAMBDA(const LocalIndex node) { changed(node) = alpha(node) != previousAlpha(node) ? 1 : 0; });
+  }
+
  private:
+  // Per shell body element, > 0 where its centre lies within margin of the centre of an
+  // element in `reached` (which always count): the distance pass of the morphing field
+  // (coupling/alpha_field.hpp) with the reached centres as its "PD nodes", linear profile.
+  Kokkos::View<double*, Kokkos::HostSpace> withinMargin(const std::vector<LocalIndex>& reached) const {
+    const auto& ccm = bodies_.ccmElements;
+    CoordinateView<Kokkos::HostSpace> centres("adaptive element centres", ccm.size()),
+        reachedCentres("adaptive reached centres", reached.size());
+    for (std::size_t k = 0; k < ccm.size(); ++k)
+      for (int d = 0; d < 3; ++d) {
+        centres(k, d) = 0.0;
+        for (int a = 0; a < 4; ++a) centres(k, d) += 0.25 * mesh_.coordinates(mesh_.quads(ccm[k], a), d);
+      }
+    Kokkos::View<double*, Kokkos::HostSpace> near("adaptive within margin", ccm.size());
+    for (std::size_t r = 0; r < reached.size(); ++r) {
+      near(reached[r]) = 1.0;
+      for (int d = 0; d < 3; ++d) reachedCentres(r, d) = centres(reached[r], d);
+    }
+    if (margin_ > 0.0 && !reached.empty())
+      Kokkos::deep_copy(near, computeAlphaField(space_, Kokkos::create_mirror_view_and_copy(Memory{}, centres),
+                                                Kokkos::create_mirror_view_and_copy(Memory{}, reachedCentres),
+                                                margin_, deck::TransitionProfile::Linear));
+    return near;
+  }
+
   void rebuild() {
     bodies_ = makeCoupledBodies(space_, mesh_, elementIsPd_, inputs_);
     const auto numShell = bodies_.ccmElements.size();
@@ -113,9 +164,11 @@ class AdaptivePdZone {
   ExecutionSpaceT space_;
   const mesh::HostQuadMesh& mesh_;
   CouplingInputs inputs_;
+  double margin_;  // [m]
   Kokkos::View<std::uint8_t*, Kokkos::HostSpace> elementIsPd_;
   CoupledBodies<Memory> bodies_;
   Kokkos::View<std::uint8_t*, Memory> isCcmElement_;
+  Kokkos::View<std::uint8_t*, Memory> changedNodes_;
   VectorView<Memory> strain_;
   double criticalStretch_ = 0.0, threshold_ = 0.0;
 };
@@ -125,7 +178,7 @@ class AdaptivePdZone {
 template <class ExecutionSpaceT, class SolverT>
 LocalIndex growPdZone(AdaptivePdZone<ExecutionSpaceT>& zone, SolverT& solver) {
   const LocalIndex switched = zone.update(solver.kinematics());
-  if (switched > 0) solver.replaceBodies(zone.bodies().pdBody, zone.bodies().shellElements());
+  if (switched > 0) solver.replaceBodies(zone.bodies().pdBody, zone.bodies().shellElements(), zone.changedNodes());
   return switched;
 }
 

@@ -113,10 +113,12 @@ struct Transition {
 };
 
 // zones.adaptive (explicit runs): a CCM element turns PD when its largest surface strain
-// reaches strainFraction x the bonds' critical stretch s_c (coupling/adaptive_zone.hpp).
+// reaches strainFraction x the bonds' critical stretch s_c, and with it the CCM elements
+// within `margin` of it (coupling/adaptive_zone.hpp).
 struct AdaptiveZone {
   double strainFraction = 0.5;
   long long checkEvery = 10;  // steps between checks
+  double margin = 0.0;        // [m]; the reader fills in its default 2 delta
 };
 
 struct Zones {

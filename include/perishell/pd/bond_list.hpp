@@ -42,4 +42,38 @@ BondList<TargetMemorySpaceT> mirrorTo(const BondList<SourceMemorySpaceT>& source
           Kokkos::create_mirror_view_and_copy(target, source.volumeFactor)};
 }
 
+// The rows of the nodes with nodeMask(i) != 0, the other rows empty: a node-mapped kernel over
+// the result evaluates only the masked nodes' bonds. The half list and its per-bond data are
+// shared, not copied (fullToHalf still indexes them), so per-bond state views stay valid.
+template <class ExecutionSpaceT, class MemorySpaceT>
+BondList<MemorySpaceT> restrictRows(const ExecutionSpaceT& space, const BondList<MemorySpaceT>& bonds,
+                                    const Kokkos::View<const std::uint8_t*, MemorySpaceT>& nodeMask) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  const LocalIndex numNodes = bonds.numNodes();
+  BondList<MemorySpaceT> rows = bonds;
+  rows.offsets = Kokkos::View<RowOffset*, MemorySpaceT>("restricted bond offsets", numNodes + 1);
+  const auto offsets = rows.offsets, fullOffsets = bonds.offsets;
+  RowOffset entries = 0;
+  Kokkos::parallel_scan(
+      "perishell::pd::restrictRows::offsets", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numNodes + 1),
+      KOKKOS_LAMBDA(const LocalIndex node, RowOffset& sum, const bool final) {
+        if (final) offsets(node) = sum;
+        if (node < numNodes && nodeMask(node)) sum += fullOffsets(node + 1) - fullOffsets(node);
+      },
+      entries);
+  rows.neighbours = Kokkos::View<LocalIndex*, MemorySpaceT>("restricted bond neighbours", entries);
+  rows.fullToHalf = Kokkos::View<RowOffset*, MemorySpaceT>("restricted bond full to half", entries);
+  const auto neighbours = rows.neighbours, fullToHalf = rows.fullToHalf;
+  const auto fullNeighbours = bonds.neighbours, fullFullToHalf = bonds.fullToHalf;
+  Kokkos::parallel_for(
+      "perishell::pd::restrictRows::copy", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numNodes),
+      KOKKOS_LAMBDA(const LocalIndex node) {
+        for (RowOffset k = 0; k < offsets(node + 1) - offsets(node); ++k) {
+          neighbours(offsets(node) + k) = fullNeighbours(fullOffsets(node) + k);
+          fullToHalf(offsets(node) + k) = fullFullToHalf(fullOffsets(node) + k);
+        }
+      });
+  return rows;
+}
+
 }  // namespace perishell::pd

@@ -59,6 +59,58 @@ struct ShellBody {
   LocalIndex numElements() const { return static_cast<LocalIndex>(quads.extent(0)); }
 };
 
+// The elements of `body` with a node where nodeMask != 0, as a body of their own that
+// scatters its forces (no node incidence): the critical step's local estimate evaluates only
+// the elements around a change (solvers/explicit/central_difference.hpp). Every per-element
+// view of ShellBody is gathered here; a new one must be too.
+template <class ExecutionSpaceT, class MemorySpaceT>
+ShellBody<MemorySpaceT> selectElements(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
+                                       const Kokkos::View<const std::uint8_t*, MemorySpaceT>& nodeMask) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  const auto quads = body.quads;
+  const LocalIndex numElements = body.numElements();
+  Kokkos::View<LocalIndex*, MemorySpaceT> selected("selected shell elements", numElements);
+  LocalIndex count = 0;
+  Kokkos::parallel_scan(
+      "perishell::shell::selectElements::list", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numElements),
+      KOKKOS_LAMBDA(const LocalIndex e, LocalIndex& sum, const bool final) {
+        bool touches = false;
+        for (int a = 0; a < 4; ++a) touches = touches || nodeMask(quads(e, a)) != 0;
+        if (!touches) return;
+        if (final) selected(sum) = e;
+        ++sum;
+      },
+      count);
+  ShellBody<MemorySpaceT> subset;
+  subset.kind = body.kind;
+  subset.section = body.section;
+  subset.referencePositions = body.referencePositions;
+  subset.assembly = ElementForceAssembly::Scatter;
+  subset.quads = QuadConnectivityView<MemorySpaceT>("selected quads", count);
+  subset.membraneBendingScale =
+      Kokkos::View<double* [4], Kokkos::LayoutRight, MemorySpaceT>("selected membrane-bending scales", count);
+  const bool withStiffness = body.localStiffness.extent(0) > 0, withEdges = body.quadraticEdges.extent(0) > 0;
+  if (withStiffness)
+    subset.localStiffness =
+        Kokkos::View<double* [24][24], Kokkos::LayoutRight, MemorySpaceT>("selected local stiffness", count);
+  if (withEdges) subset.quadraticEdges = Kokkos::View<unsigned*, MemorySpaceT>("selected quadratic edges", count);
+  const auto to = subset;
+  Kokkos::parallel_for(
+      "perishell::shell::selectElements::copy", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, count),
+      KOKKOS_LAMBDA(const LocalIndex k) {
+        const LocalIndex e = selected(k);
+        for (int a = 0; a < 4; ++a) {
+          to.quads(k, a) = body.quads(e, a);
+          to.membraneBendingScale(k, a) = body.membraneBendingScale(e, a);
+        }
+        if (withStiffness)
+          for (int r = 0; r < 24; ++r)
+            for (int c = 0; c < 24; ++c) to.localStiffness(k, r, c) = body.localStiffness(e, r, c);
+        if (withEdges) to.quadraticEdges(k) = body.quadraticEdges(e);
+      });
+  return subset;
+}
+
 // The faster assembly of the one-point element's forces on each backend (docs/explicit.md,
 // "The explicit shell element"): Gather on host backends (no atomics; 1.25x faster on 2
 // OpenMP threads), Scatter on a GPU (1.4x faster on the H200).

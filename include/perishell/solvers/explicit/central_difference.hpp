@@ -203,7 +203,12 @@ class CentralDifferenceSolver {
   // that jump is booked as input, so the energy balance stays closed. A time step taken
   // from the estimate is lowered to safetyFactor x the new estimate when needed; a fixed one
   // above the new critical step throws ExplicitInstability.
-  void replaceBodies(pd::PdBody<MemorySpace> body, std::optional<shell::ShellBody<MemorySpace>> shellBody) {
+  //
+  // changedNodes (per node, 1 where the bodies changed; empty: anywhere) confines the new
+  // estimate to the change (estimateCriticalTimeStep's patch), and the critical step is the
+  // lower of the old one and this local estimate, so it never rises.
+  void replaceBodies(pd::PdBody<MemorySpace> body, std::optional<shell::ShellBody<MemorySpace>> shellBody,
+                     const Kokkos::View<const std::uint8_t*, MemorySpace>& changedNodes = {}) {
     requireSingleRank("an adaptive PD zone");
     const double before = energies().stored();
     intact_ = fracture::carryBrokenBonds(space_, body_.bonds, intact_, body.bonds);
@@ -216,7 +221,9 @@ class CentralDifferenceSolver {
     validate();
     inertia_ = computeNodalInertia(space_, body_, shell_, options_.density, options_.thickness);
     assembly::weighInertiaByShare(space_, actions_.mirrorImages, inertia_.mass, inertia_.rotaryInertia);
-    criticalTimeStep_ = estimateCriticalTimeStep();
+    criticalTimeStep_ = changedNodes.extent(0) == 0
+                            ? estimateCriticalTimeStep()
+                            : std::min(criticalTimeStep_, estimateCriticalTimeStep(80, changedNodes));
     initialEnergy_ += energies().stored() - before;
     // A step chosen from the estimate follows it down; one the deck fixed must stay below it.
     if (options_.timeStep <= 0.0) timeStep_ = std::min(timeStep_, options_.safetyFactor * criticalTimeStep_);
@@ -278,6 +285,8 @@ class CentralDifferenceSolver {
   double time() const { return time_; }
   double timeStep() const { return timeStep_; }
   double criticalTimeStep() const { return criticalTimeStep_; }
+  // Force evaluations the last critical-step estimate took.
+  int lanczosProducts() const { return lanczosProducts_; }
   const EnergyReport& lastEnergyReport() const { return lastReport_; }
   const ExplicitPhaseSeconds& phaseSeconds() const { return phaseSeconds_; }
   const pd::PdBody<MemorySpace>& body() const { return body_; }
@@ -378,10 +387,17 @@ class CentralDifferenceSolver {
   // their strain energy into outputs.strainEnergy unless it is empty, and then the
   // elements' hourglass energy into hourglassEnergy_.
   void addInternalForces(const pd::PdKinematics<MemorySpace>& state, const pd::BondForceOutputs<MemorySpace>& outputs) {
-    if (body_.bonds.numBonds() > 0) pd::computeBondForces(space_, options_.forceKernel, body_, state, intact_, outputs);
+    addInternalForces(body_, shell_, options_.forceKernel, state, outputs);
+  }
+
+  // The same over given bodies (the local critical-step estimate's patch of this model's).
+  void addInternalForces(const pd::PdBody<MemorySpace>& body, const std::optional<shell::ShellBody<MemorySpace>>& shell,
+                         deck::ForceKernel kernel, const pd::PdKinematics<MemorySpace>& state,
+                         const pd::BondForceOutputs<MemorySpace>& outputs) {
+    if (body.bonds.numBonds() > 0) pd::computeBondForces(space_, kernel, body, state, intact_, outputs);
     const bool withEnergy = outputs.strainEnergy.extent(0) > 0;
-    if (shell_)
-      shell::subtractShellForces(space_, *shell_, state, outputs.forces, outputs.strainEnergy,
+    if (shell)
+      shell::subtractShellForces(space_, *shell, state, outputs.forces, outputs.strainEnergy,
                                  withEnergy ? hourglassEnergy_ : VectorView<MemorySpace>());
     assembly::condenseImageForces(space_, actions_.mirrorImages, outputs.forces);
   }
@@ -546,16 +562,36 @@ class CentralDifferenceSolver {
   // default plate 4.1.2: 80 power iterations were 0.05 % low; Lanczos settles in 25 products
   // (setup 3.3 s -> 1.3 s on 2 threads). The 300 x 120 mm adaptive plate: power iteration 0.65 %
   // low, Lanczos within 1e-4 after 80.
-  double estimateCriticalTimeStep(int maxProducts = 80) {
+  //
+  // startSupport (per node; empty: every node) confines the estimate to a patch: after a local
+  // change of the bodies the new top of the spectrum, if any, lies there. Lanczos then runs on
+  // the patch's block of A (the support's DOFs, the rest held at zero), whose products
+  // evaluate only the patch's bonds and elements. By Cauchy interlacing its top is at most the
+  // whole model's: the estimate is local, not a bound, as the global one is from below too.
+  double estimateCriticalTimeStep(int maxProducts = 80,
+                                  const Kokkos::View<const std::uint8_t*, MemorySpace>& startSupport = {}) {
     const LocalIndex numNodes = body_.numNodes();
     pd::NodalVectorView<MemorySpace> q("lanczos q", numNodes), previous("lanczos previous q", numNodes),
         product("lanczos A q", numNodes);
-    const TrialScratch scratch{pd::PdKinematics<MemorySpace>(numNodes),
-                               VectorView<MemorySpace>("critical step fracture energy", numNodes),
-                               pd::makeIntactFlags(body_.bonds, "critical step bonds"), characteristicLength()};
+    TrialScratch scratch{pd::PdKinematics<MemorySpace>(numNodes),
+                         VectorView<MemorySpace>("critical step fracture energy", numNodes),
+                         pd::makeIntactFlags(body_.bonds, "critical step bonds"),
+                         characteristicLength(),
+                         body_,
+                         shell_,
+                         options_.forceKernel,
+                         startSupport};
+    if (startSupport.extent(0) > 0) {
+      // The patch: the support's rows of bonds and the elements touching it (node-gather
+      // evaluates only the rows it is given; bond-scatter would visit every bond).
+      scratch.body.bonds = pd::restrictRows(space_, body_.bonds, startSupport);
+      if (shell_) scratch.shell = shell::selectElements(space_, *shell_, startSupport);
+      scratch.kernel = deck::ForceKernel::NodeGather;
+    }
     const auto constrained = actions_.constrainedDofs;
     const auto globalIds = distribution_.globalIds();
     const bool localIsGlobal = globalIds.extent(0) == 0;
+    const bool everywhere = startSupport.extent(0) == 0;
     Kokkos::parallel_for(
         "perishell::solvers::CentralDifferenceSolver::lanczosStart",
         Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes), KOKKOS_LAMBDA(const LocalIndex node) {
@@ -567,11 +603,16 @@ class CentralDifferenceSolver {
             hash ^= hash >> 16;
             hash *= 2246822519u;
             hash ^= hash >> 13;
-            q(node, d) = ((constrained(node) >> d) & 1) ? 0.0 : (hash % 2001u) / 1000.0 - 1.0;
+            q(node, d) = ((constrained(node) >> d) & 1) || !(everywhere || startSupport(node))
+                             ? 0.0
+                             : (hash % 2001u) / 1000.0 - 1.0;
           }
         });
     const double startNorm = std::sqrt(dot(q, q));
-    if (!(startNorm > 0.0)) throw std::invalid_argument("explicit solver: every DOF is prescribed");
+    if (!(startNorm > 0.0)) {
+      if (!everywhere) return criticalTimeStep_;  // the change touched prescribed DOFs only
+      throw std::invalid_argument("explicit solver: every DOF is prescribed");
+    }
     scale(q, 1.0 / startNorm);
     std::vector<double> diagonal, offDiagonal;
     double beta = 0.0, ritz = 0.0;
@@ -583,6 +624,7 @@ class CentralDifferenceSolver {
       diagonal.push_back(alpha);
       const double last = ritz;
       ritz = largestTridiagonalEigenvalue(diagonal, offDiagonal);
+      lanczosProducts_ = k + 1;
       if (k >= 4 && std::abs(ritz - last) <= 1e-6 * ritz) break;
       beta = std::sqrt(dot(product, product));
       if (!(beta > 1e-14 * std::abs(ritz))) break;  // an invariant subspace: the spectrum's top is found
@@ -609,12 +651,17 @@ class CentralDifferenceSolver {
     return solver.eigenvalues().maxCoeff();
   }
 
-  // What a trial force evaluation writes besides the forces (discarded).
+  // What a trial force evaluation writes besides the forces (discarded), and what it
+  // evaluates: the whole model, or a patch of it (support: its nodes; empty: every node).
   struct TrialScratch {
     pd::PdKinematics<MemorySpace> state;
     VectorView<MemorySpace> fracture;
     pd::BondFlagView<MemorySpace> intact;
     double length;  // characteristicLength(), the translations' scale
+    pd::PdBody<MemorySpace> body;
+    std::optional<shell::ShellBody<MemorySpace>> shell;
+    deck::ForceKernel kernel;
+    Kokkos::View<const std::uint8_t*, MemorySpace> support;
   };
 
   // product = A v = M^-1/2 K M^-1/2 v at the prescribed DOFs' zero, from the forces at the trial
@@ -664,12 +711,14 @@ class CentralDifferenceSolver {
                                  assembly::NothingPrescribed{});
     fillContiguous(space_, product, 0.0);
     const pd::BondForceOutputs<MemorySpace> outputs{product, VectorView<MemorySpace>(), scratch.fracture, scratch.intact};
-    addInternalForces(trial, outputs);
+    addInternalForces(scratch.body, scratch.shell, scratch.kernel, trial, outputs);
+    const auto support = scratch.support;
+    const bool wholeModel = support.extent(0) == 0;
     Kokkos::parallel_for(
         "perishell::solvers::CentralDifferenceSolver::scaledProduct",
         Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes), KOKKOS_LAMBDA(const LocalIndex node) {
           for (int d = 0; d < 6; ++d)
-            product(node, d) = ((constrained(node) >> d) & 1)
+            product(node, d) = ((constrained(node) >> d) & 1) || !(wholeModel || support(node))
                                    ? 0.0
                                    : -product(node, d) /
                                          (epsilon * Kokkos::Experimental::sqrt(d < 3 ? mass(node) : rotaryInertia(node)));
@@ -779,6 +828,7 @@ class CentralDifferenceSolver {
   pd::BondFlagView<MemorySpace> discardedFlags_;
   NodalInertia<MemorySpace> inertia_;
   double criticalTimeStep_ = 0.0;
+  int lanczosProducts_ = 0;  // of the last critical-step estimate
   double timeStep_ = 0.0;
   double time_ = 0.0;
   long long step_ = 0;
