@@ -63,8 +63,10 @@ BondList<MemorySpaceT> restrictRows(const ExecutionSpaceT& space, const BondList
       entries);
   rows.neighbours = Kokkos::View<LocalIndex*, MemorySpaceT>("restricted bond neighbours", entries);
   rows.fullToHalf = Kokkos::View<RowOffset*, MemorySpaceT>("restricted bond full to half", entries);
-  const auto neighbours = rows.neighbours, fullToHalf = rows.fullToHalf;
-  const auto fullNeighbours = bonds.neighbours, fullFullToHalf = bonds.fullToHalf;
+  const auto neighbours = rows.neighbours;
+  const auto fullToHalf = rows.fullToHalf;
+  const auto fullNeighbours = bonds.neighbours;
+  const auto fullFullToHalf = bonds.fullToHalf;
   Kokkos::parallel_for(
       "perishell::pd::restrictRows::copy", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numNodes),
       KOKKOS_LAMBDA(const LocalIndex node) {
