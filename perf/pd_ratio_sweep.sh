@@ -12,13 +12,16 @@
 #       steel    - 4.2.2 steel plate (explicit), ratios 0, 0.25, 0.5, 0.75, 1; the zone grows
 #                  from the crack centre; at 0 the model is all CCM and has no pre-crack (a
 #                  pre-crack must lie in PD)
+#       steel-fine - the same on the grid the issue names, dx = 0.7 mm (84,681 nodes): the
+#                  flank node sets are the two columns across the crack, x = 100.8 and
+#                  101.5 mm, 43 nodes each, carrying 1800 N / 43
 # LIMIT to time a slow backend in less time: steel - stop after this many steps (the load
 #       ramp is unchanged; default the deck's 50,000); pressed - the grid spacing [m]
 #       (default the deck's 0.5e-3).
 # Each run's full log is kept next to the CSV (OUT.csv.ratio-R.log).
 set -euo pipefail
 if [[ $# -lt 3 ]]; then
-  sed -n '2,17p' "$0" >&2
+  sed -n '2,20p' "$0" >&2
   exit 2
 fi
 app=$1 case=$2 csv=$3 limit=${4:-}
@@ -29,7 +32,16 @@ trap 'rm -rf "$work"' EXIT
 case $case in
   pressed) base=$cases/pressed_plate_4_2_1.yaml ratios="0 0.25 0.5 0.75 1" ;;
   steel) base=$cases/steel_plate_4_2_2.yaml ratios="0 0.25 0.5 0.75 1" ;;
-  *) echo "pd_ratio_sweep: unknown case '$case' (pressed or steel)" >&2; exit 2 ;;
+  steel-fine)
+    base=$work/steel_plate_4_2_2_fine.yaml ratios="0 0.25 0.5 0.75 1"
+    sed -e 's/^    spacing: 1.75e-3$/    spacing: 0.7e-3/' \
+      -e 's/left-flank: {box: {min: \[0.0995,/left-flank: {box: {min: [0.1005,/' \
+      -e 's/\(left-flank: {box: {min: \[0.1005, 0.0865, -1.0\], max: \[\)0.1000,/\10.1010,/' \
+      -e 's/right-flank: {box: {min: \[0.1010,/right-flank: {box: {min: [0.1012,/' \
+      -e 's/105.88235294117646/41.86046511627907/g' "$cases/steel_plate_4_2_2.yaml" > "$base"
+    [[ $(grep -c -e 'spacing: 0.7e-3' -e 'min: \[0.1005' -e 'max: \[0.1010' -e 'min: \[0.1012' -e '41.86046511627907' "$base") == 5 ]] ||
+      { echo "pd_ratio_sweep: apps/cases/steel_plate_4_2_2.yaml no longer has the lines steel-fine edits" >&2; exit 1; } ;;
+  *) echo "pd_ratio_sweep: unknown case '$case' (pressed, steel or steel-fine)" >&2; exit 2 ;;
 esac
 
 # The deck at one ratio, from the base deck's zones block.
@@ -40,7 +52,7 @@ deck_for() {
       sed -e "s/^      target: 0.5$/      target: $ratio/" "$base" > "$deck"
       grep -q "target: $ratio\$" "$deck" || { echo "pd_ratio_sweep: $base has no 'target: 0.5' line" >&2; exit 1; }
       if [[ -n $limit ]]; then sed -i -e "s/^    spacing: 0.5e-3$/    spacing: $limit/" "$deck"; fi ;;
-    steel)
+    steel | steel-fine)
       if [[ $ratio == 0 ]]; then
         sed -e "s/^    default: pd$/    default: ccm/" "$base" | awk '/^    pre-cracks:/ {skip = 1; next} skip && /^      / {next} {skip = 0; print}' > "$deck"
         grep -q "default: ccm" "$deck" || { echo "pd_ratio_sweep: $base has no 'default: pd' line" >&2; exit 1; }
