@@ -204,11 +204,12 @@ class CentralDifferenceSolver {
   // from the estimate is lowered to safetyFactor x the new estimate when needed; a fixed one
   // above the new critical step throws ExplicitInstability.
   //
-  // changedNodes (per node, 1 where the bodies changed; empty: anywhere) confines the new
-  // estimate to the change (estimateCriticalTimeStep's patch), and the critical step is the
-  // lower of the old one and this local estimate, so it never rises.
+  // changedNodes (per node, 1 where the bodies changed) confines the new estimate to the
+  // change: estimateCriticalTimeStep's patch is those nodes and their bond and element
+  // neighbours, whose rows of K changed with them. The critical step is the lower of the old
+  // one and this local estimate, so it never rises.
   void replaceBodies(pd::PdBody<MemorySpace> body, std::optional<shell::ShellBody<MemorySpace>> shellBody,
-                     const Kokkos::View<const std::uint8_t*, MemorySpace>& changedNodes = {}) {
+                     const Kokkos::View<const std::uint8_t*, MemorySpace>& changedNodes) {
     requireSingleRank("an adaptive PD zone");
     const double before = energies().stored();
     intact_ = fracture::carryBrokenBonds(space_, body_.bonds, intact_, body.bonds);
@@ -221,9 +222,7 @@ class CentralDifferenceSolver {
     validate();
     inertia_ = computeNodalInertia(space_, body_, shell_, options_.density, options_.thickness);
     assembly::weighInertiaByShare(space_, actions_.mirrorImages, inertia_.mass, inertia_.rotaryInertia);
-    criticalTimeStep_ = changedNodes.extent(0) == 0
-                            ? estimateCriticalTimeStep()
-                            : std::min(criticalTimeStep_, estimateCriticalTimeStep(80, changedNodes));
+    criticalTimeStep_ = std::min(criticalTimeStep_, estimateCriticalTimeStep(80, withNeighbours(changedNodes)));
     initialEnergy_ += energies().stored() - before;
     // A step chosen from the estimate follows it down; one the deck fixed must stay below it.
     if (options_.timeStep <= 0.0) timeStep_ = std::min(timeStep_, options_.safetyFactor * criticalTimeStep_);
@@ -637,6 +636,33 @@ class CentralDifferenceSolver {
       throw std::runtime_error("explicit solver: the critical time step estimate failed (largest eigenvalue " +
                                std::to_string(ritz) + ")");
     return 2.0 / std::sqrt(ritz);
+  }
+
+  // The nodes marked in `nodes` and every node that shares a bond or an element with one.
+  Kokkos::View<const std::uint8_t*, MemorySpace> withNeighbours(
+      const Kokkos::View<const std::uint8_t*, MemorySpace>& nodes) const {
+    Kokkos::View<std::uint8_t*, MemorySpace> grown("changed nodes and neighbours", nodes.extent(0));
+    const auto bonds = body_.bonds;
+    Kokkos::parallel_for(
+        "perishell::solvers::CentralDifferenceSolver::bondNeighbours",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, bonds.numNodes()), KOKKOS_LAMBDA(const LocalIndex node) {
+          bool near = nodes(node) != 0;
+          for (RowOffset entry = bonds.offsets(node); entry < bonds.offsets(node + 1) && !near; ++entry)
+            near = nodes(bonds.neighbours(entry)) != 0;
+          grown(node) = near ? 1 : 0;
+        });
+    if (shell_) {
+      const auto quads = shell_->quads;
+      Kokkos::parallel_for(
+          "perishell::solvers::CentralDifferenceSolver::elementNeighbours",
+          Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, shell_->numElements()), KOKKOS_LAMBDA(const LocalIndex e) {
+            bool touches = false;
+            for (int a = 0; a < 4; ++a) touches = touches || nodes(quads(e, a)) != 0;
+            if (touches)
+              for (int a = 0; a < 4; ++a) Kokkos::atomic_assign(&grown(quads(e, a)), std::uint8_t(1));
+          });
+    }
+    return grown;
   }
 
   // The largest eigenvalue of the symmetric tridiagonal matrix (diagonal, offDiagonal below it).
