@@ -39,6 +39,17 @@ struct ElementState {
   double rotations[4][3][3];
 };
 
+// An element state's rotations as unit quaternions (the explicit elements read them so).
+struct ElementQuaternions {
+  double q[4][4];
+};
+
+inline ElementQuaternions quaternionsOf(const ElementState& state) {
+  ElementQuaternions out;
+  for (int a = 0; a < 4; ++a) perishell::rotation::fromMatrix(state.rotations[a], out.q[a]);
+  return out;
+}
+
 // A warped, distorted reference element of about 1 m.
 inline void warpedReference(double X[4][3]) {
   const double nodes[4][3] = {{0.0, 0.0, 0.0}, {1.1, 0.1, 0.03}, {1.0, 0.9, -0.02}, {-0.1, 0.8, 0.04}};

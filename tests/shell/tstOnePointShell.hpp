@@ -9,6 +9,7 @@
 #include <perishell/core/types.hpp>
 #include <perishell/shell/explicit_triangle.hpp>
 #include <perishell/shell/one_point_shell.hpp>
+#include <perishell/shell/shell_body.hpp>
 #include <shell/element_states.hpp>
 
 #include <iostream>
@@ -22,7 +23,8 @@ using DD = perishell::Dual<perishell::Dual<double>>;
 
 inline double force(const ElementState& state, const shell::ShellSection& section, double f[dofs],
                     double membraneBendingScale = 1.0) {
-  return shell::onePointShellForce(state.reference, state.positions, state.rotations, section, membraneBendingScale, f)
+  return shell::onePointShellForce(state.reference, state.positions, quaternionsOf(state).q, section,
+                                   membraneBendingScale, f)
       .strain;
 }
 
@@ -121,14 +123,16 @@ HostForces evaluateOnDevice(const HostPositions& referenceHost, const HostPositi
   Kokkos::parallel_for(
       "one_point_shell_test::evaluate", Kokkos::RangePolicy<ExecutionSpaceT>(0, referenceHost.extent(0)),
       KOKKOS_LAMBDA(const int e) {
-        double X[4][3], x[4][3], R[4][3][3], f[dofs];
-        for (int a = 0; a < 4; ++a)
+        double X[4][3], x[4][3], R[4][3][3], q[4][4], f[dofs];
+        for (int a = 0; a < 4; ++a) {
           for (int k = 0; k < 3; ++k) {
             X[a][k] = references(e, a, k);
             x[a][k] = positions(e, a, k);
             for (int l = 0; l < 3; ++l) R[a][k][l] = rotations(e, a, k, l);
           }
-        const shell::OnePointEnergies energies = shell::onePointShellForce(X, x, R, section, 0.7, f);
+          perishell::rotation::fromMatrix(R[a], q[a]);
+        }
+        const shell::OnePointEnergies energies = shell::onePointShellForce(X, x, q, section, 0.7, f);
         // Literal columns: a namespace-scope constexpr bound by reference is not visible in device code.
         for (int r = 0; r < 24; ++r) out(e, r) = f[r];
         out(e, 24) = energies.strain;
@@ -289,7 +293,7 @@ TEST(TEST_CATEGORY, one_point_device_evaluation_matches_host) {
   for (int e = 0; e < 3; ++e) {
     double f[dofs];
     const shell::OnePointEnergies energies =
-        shell::onePointShellForce(states[e].reference, states[e].positions, states[e].rotations, section, 0.7, f);
+        shell::onePointShellForce(states[e].reference, states[e].positions, quaternionsOf(states[e]).q, section, 0.7, f);
     const double forceScale = section.youngModulus * section.thickness;
     for (int r = 0; r < dofs; ++r) EXPECT_NEAR(device(e, r), f[r], 1e-12 * forceScale) << "element " << e << " row " << r;
     EXPECT_NEAR(device(e, dofs), energies.strain, 1e-12 * std::max(energies.strain, forceScale * 1e-12));
@@ -314,7 +318,7 @@ TEST(TEST_CATEGORY, explicit_triangle_force_is_the_mitc3_triangles) {
         for (int c = 0; c < 18; ++c) K3[r][c] = K4[r][c];
       const double storedEnergy = shell::shellInternalForce<3>(X, state.positions, state.rotations, K3, stored);
       const double writtenEnergy =
-          shell::explicitTriangleForce(X, state.positions, state.rotations, section, scale, edges, written);
+          shell::explicitTriangleForce(X, state.positions, quaternionsOf(state).q, section, scale, edges, written);
       EXPECT_GT(storedEnergy, 0.0);
       EXPECT_NEAR(writtenEnergy, storedEnergy, 1e-12 * storedEnergy) << "edges " << edges << " scale " << scale;
       double error = 0.0;
@@ -327,8 +331,104 @@ TEST(TEST_CATEGORY, explicit_triangle_force_is_the_mitc3_triangles) {
   const double turn[3] = {0.3, -1.1, 0.7}, shift[3] = {0.3, -1.2, 2.0};
   const ElementState moved = rigidlyMoved(X, turn, shift);
   double rigid[18];
-  EXPECT_LE(shell::explicitTriangleForce(X, moved.positions, moved.rotations, section, 1.0, 7u, rigid), 1e-20 * forceScale);
+  EXPECT_LE(shell::explicitTriangleForce(X, moved.positions, quaternionsOf(moved).q, section, 1.0, 7u, rigid),
+            1e-20 * forceScale);
   for (int i = 0; i < 18; ++i) EXPECT_LE(std::abs(rigid[i]), 1e-10 * forceScale) << i;
+}
+
+TEST(TEST_CATEGORY, one_point_body_forces_are_the_elements_with_and_without_triangles) {
+  // subtractShellForces runs a kernel specialised for bodies of quads only, and one that takes
+  // each element's triangle or quad branch: both give the sum of the element forces evaluated
+  // one by one on the host, with either assembly.
+  using MemorySpace = TEST_EXECSPACE::memory_space;
+  perishell::mesh::HostQuadMesh plate;
+  plate.coordinates = perishell::CoordinateView<Kokkos::HostSpace>("nodes", 6);
+  for (int node = 0; node < 6; ++node) {
+    plate.coordinates(node, 0) = 0.01 * (node % 3) + 0.001 * (node == 4);
+    plate.coordinates(node, 1) = 0.01 * (node / 3);
+  }
+  plate.quads = perishell::QuadConnectivityView<Kokkos::HostSpace>("elements", 3);
+  const perishell::LocalIndex corners[3][4] = {{0, 1, 4, 3}, {1, 2, 5, 5}, {1, 5, 4, 4}};
+  for (int e = 0; e < 3; ++e)
+    for (int a = 0; a < 4; ++a) plate.quads(e, a) = corners[e][a];
+  perishell::pd::PdKinematics<Kokkos::HostSpace> hostState(6);
+  for (int node = 0; node < 6; ++node) {
+    const double turn[3] = {0.02 * node - 0.05, 0.03 - 0.01 * node, 0.015 * (node % 2)};
+    double q[4];
+    perishell::rotation::exponential(turn, q);
+    for (int k = 0; k < 4; ++k) hostState.rotations(node, k) = q[k];
+    for (int k = 0; k < 3; ++k) hostState.displacements(node, k) = 1e-4 * std::sin(1.0 + node + 2.0 * k);
+  }
+  perishell::pd::PdKinematics<MemorySpace> state(6);
+  Kokkos::deep_copy(state.displacements, hostState.displacements);
+  Kokkos::deep_copy(state.rotations, hostState.rotations);
+  const shell::ShellSection section = thickSection();
+  const double forceScale = section.youngModulus * section.thickness;
+  for (const std::vector<perishell::LocalIndex>& elements : {std::vector<perishell::LocalIndex>{0}, std::vector<perishell::LocalIndex>{0, 1, 2}}) {
+    auto body = shell::makeShellBody(TEST_EXECSPACE{}, plate, elements, section,
+                                     Kokkos::View<double* [4], Kokkos::LayoutRight, MemorySpace>("scale", elements.size()),
+                                     shell::ShellElementKind::OnePoint);
+    Kokkos::deep_copy(body.membraneBendingScale, 1.0);
+    EXPECT_EQ(body.hasTriangles, elements.size() == 3);
+    // A triangle's edge shared with the quad has no Allman term (triangleQuadraticEdges).
+    const auto quadraticEdges = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.quadraticEdges);
+    double expected[6][6] = {};
+    for (const perishell::LocalIndex e : elements) {
+      double X[4][3], x[4][3], q[4][4], f[dofs];
+      for (int a = 0; a < 4; ++a)
+        for (int k = 0; k < 3; ++k) {
+          X[a][k] = plate.coordinates(plate.quads(e, a), k);
+          x[a][k] = X[a][k] + hostState.displacements(plate.quads(e, a), k);
+          for (int l = 0; l < 4; ++l) q[a][l] = hostState.rotations(plate.quads(e, a), l);
+        }
+      const int count = e == 0 ? 4 : 3;
+      if (count == 4)
+        shell::onePointShellForce(X, x, q, section, 1.0, f);
+      else
+        shell::explicitTriangleForce(X, x, q, section, 1.0, quadraticEdges(e), f);
+      for (int a = 0; a < count; ++a)
+        for (int d = 0; d < 6; ++d) expected[plate.quads(e, a)][d] -= f[6 * a + d];
+    }
+    for (const auto assembly : {shell::ElementForceAssembly::Scatter, shell::ElementForceAssembly::Gather}) {
+      body.assembly = assembly;
+      perishell::pd::NodalVectorView<MemorySpace> forces("forces", 6);
+      shell::subtractShellForces(TEST_EXECSPACE{}, body, state, forces);
+      const auto result = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, forces);
+      double largest = 0.0;
+      for (int node = 0; node < 6; ++node)
+        for (int d = 0; d < 6; ++d) {
+          EXPECT_NEAR(result(node, d), expected[node][d], 1e-12 * forceScale) << "node " << node << " dof " << d;
+          largest = std::max(largest, std::abs(expected[node][d]));
+        }
+      EXPECT_GT(largest, 1e-6 * forceScale);
+    }
+  }
+}
+
+TEST(TEST_CATEGORY, quaternion_of_a_matrix_and_its_logarithm_invert_the_exponential) {
+  // The explicit elements' local rotations (shell/corotational_projector.hpp) go through
+  // fromMatrix and the quaternion logarithm. Angles from 1e-9 to near pi about skew axes, and
+  // near-half turns about each axis (each of Shepperd's four branches); q and -q alike.
+  const double axes[4][3] = {{0.6, -0.48, 0.64}, {1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}};
+  for (const auto& axis : axes)
+    for (const double angle : {1e-9, 1e-4, 0.02, 0.5, 2.0, 3.0, 3.14}) {
+      const double theta[3] = {angle * axis[0], angle * axis[1], angle * axis[2]};
+      double q[4], R[3][3], back[4], fromQuaternion[3], fromMatrix[3];
+      perishell::rotation::exponential(theta, q);
+      perishell::rotation::toMatrix(q, R);
+      perishell::rotation::fromMatrix(R, back);
+      EXPECT_NEAR(std::abs(q[0] * back[0] + q[1] * back[1] + q[2] * back[2] + q[3] * back[3]), 1.0, 1e-15);
+      perishell::rotation::logarithm(R, fromMatrix);
+      for (const double sign : {1.0, -1.0}) {
+        const double signed_[4] = {sign * back[0], sign * back[1], sign * back[2], sign * back[3]};
+        perishell::rotation::rotationVector(signed_, fromQuaternion);
+        for (int k = 0; k < 3; ++k) {
+          EXPECT_NEAR(fromQuaternion[k], theta[k], 4e-16 * std::max(1.0, angle / (M_PI - angle)) + 1e-24)
+              << "angle " << angle << " component " << k;
+          EXPECT_NEAR(fromQuaternion[k], fromMatrix[k], 1e-14 * std::max(1.0, angle / (M_PI - angle)) + 1e-24);
+        }
+      }
+    }
 }
 
 TEST(TEST_CATEGORY, one_point_warped_and_degenerate_elements_are_refused) {

@@ -77,6 +77,70 @@ KOKKOS_INLINE_FUNCTION void multiply(const double a[4], const double b[4], doubl
   out[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
 }
 
+// out = a conj(b) (apply b's inverse, then a)
+KOKKOS_INLINE_FUNCTION void multiplyByConjugate(const double a[4], const double b[4], double out[4]) {
+  out[0] = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+  out[1] = -a[0] * b[1] + a[1] * b[0] - a[2] * b[3] + a[3] * b[2];
+  out[2] = -a[0] * b[2] + a[1] * b[3] + a[2] * b[0] - a[3] * b[1];
+  out[3] = -a[0] * b[3] - a[1] * b[2] + a[2] * b[1] + a[3] * b[0];
+}
+
+// The unit quaternion of a rotation matrix, toMatrix's inverse (Shepperd 1978): the largest
+// of 4 w^2, 4 x^2, 4 y^2, 4 z^2 is read off the diagonal and the others divided by it, so no
+// division by a small number at any angle.
+KOKKOS_INLINE_FUNCTION void fromMatrix(const double R[3][3], double q[4]) {
+  const double trace = R[0][0] + R[1][1] + R[2][2];
+  // 2 |q_m| for the largest component q_m, and the products 4 q_m q_k.
+  double twiceLargest, scaled[4];
+  if (trace >= R[0][0] && trace >= R[1][1] && trace >= R[2][2]) {
+    twiceLargest = Kokkos::Experimental::sqrt(1.0 + trace);
+    scaled[0] = twiceLargest * twiceLargest;
+    scaled[1] = R[2][1] - R[1][2];
+    scaled[2] = R[0][2] - R[2][0];
+    scaled[3] = R[1][0] - R[0][1];
+  } else if (R[0][0] >= R[1][1] && R[0][0] >= R[2][2]) {
+    twiceLargest = Kokkos::Experimental::sqrt(1.0 + R[0][0] - R[1][1] - R[2][2]);
+    scaled[0] = R[2][1] - R[1][2];
+    scaled[1] = twiceLargest * twiceLargest;
+    scaled[2] = R[0][1] + R[1][0];
+    scaled[3] = R[0][2] + R[2][0];
+  } else if (R[1][1] >= R[2][2]) {
+    twiceLargest = Kokkos::Experimental::sqrt(1.0 - R[0][0] + R[1][1] - R[2][2]);
+    scaled[0] = R[0][2] - R[2][0];
+    scaled[1] = R[0][1] + R[1][0];
+    scaled[2] = twiceLargest * twiceLargest;
+    scaled[3] = R[1][2] + R[2][1];
+  } else {
+    twiceLargest = Kokkos::Experimental::sqrt(1.0 - R[0][0] - R[1][1] + R[2][2]);
+    scaled[0] = R[1][0] - R[0][1];
+    scaled[1] = R[0][2] + R[2][0];
+    scaled[2] = R[1][2] + R[2][1];
+    scaled[3] = twiceLargest * twiceLargest;
+  }
+  const double inverse = 0.5 / twiceLargest;
+  for (int k = 0; k < 4; ++k) q[k] = scaled[k] * inverse;
+}
+
+// The rotation vector (axis times angle) of the unit quaternion q, its logarithm: what
+// output reports as a node's rotation, and the explicit shell elements' local rotations.
+// logarithm(toMatrix(q)) for angles below pi: 2 atan(|v|/w) v/|v| with q taken on the
+// hemisphere w > 0. Near the identity atan(t)/t comes from its series in t^2, t = |v|/w.
+KOKKOS_INLINE_FUNCTION void rotationVector(const double q[4], double theta[3]) {
+  const double sign = q[0] < 0.0 ? -1.0 : 1.0;
+  const double w = sign * q[0];
+  const double sineSquared = q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  double scale;  // angle / |v|
+  if (sineSquared < 1e-6 * w * w) {
+    // atan(t)/t = 1 - t^2/3 + t^4/5 + O(t^6); t^6 < 1e-18 here.
+    const double inverseW = 1.0 / w, tangentSquared = sineSquared * inverseW * inverseW;
+    scale = 2.0 * inverseW * (1.0 + tangentSquared * (-1.0 / 3.0 + 0.2 * tangentSquared));
+  } else {
+    const double sine = Kokkos::Experimental::sqrt(sineSquared);
+    scale = 2.0 * Kokkos::Experimental::atan2(sine, w) / sine;
+  }
+  for (int k = 0; k < 3; ++k) theta[k] = sign * scale * q[k + 1];
+}
+
 // q <- exp(theta) q, renormalised so that round-off never accumulates into a stretch.
 KOKKOS_INLINE_FUNCTION void rotateBySpatialIncrement(const double theta[3], double q[4]) {
   double increment[4], updated[4];
@@ -107,13 +171,6 @@ KOKKOS_INLINE_FUNCTION void logarithm(const T R[3][3], T theta[3]) {
   for (int k = 0; k < 3; ++k) theta[k] = scale * axial[k];
 }
 
-// The rotation vector (axis times angle) of the unit quaternion q: what output reports as a
-// node's rotation (fields, history probes).
-KOKKOS_INLINE_FUNCTION void rotationVector(const double q[4], double theta[3]) {
-  double R[3][3];
-  toMatrix(q, R);
-  logarithm(R, theta);
-}
 
 // R(phi) = exp(phi) R to second order in phi: (I + Phi + Phi^2/2) R, Phi = skew(phi). The
 // implicit tangents seed phi with dual numbers at phi = 0, where only the first two

@@ -1,6 +1,7 @@
 #pragma once
-// The corotational projector of the explicit shell elements (docs/explicit.md, "The explicit
-// shell element"): global nodal forces f = dW/dq from the local ones dW/dd, for the
+// The corotational kinematics and projector of the explicit shell elements (docs/explicit.md,
+// "The explicit shell element"): the deformational DOF from the nodes' quaternions, and global
+// nodal forces f = dW/dq from the local ones dW/dd, for the
 // deformational DOF d of shell/mitc4_shell.hpp (local translations E (x_a - x_c) - X_a and
 // rotations log(E R_a E0^T)), the frame E built from the diagonals and the edge sum. Exact:
 // it is the chain rule through d, the frame's spin included, written out so that no
@@ -10,9 +11,32 @@
 
 namespace perishell::shell::detail {
 
-// d log(exp(delta) Q) / d delta = J_l^-1(theta), the inverse left Jacobian of SO(3):
-// I - 1/2 [theta] + c [theta]^2, c = 1/theta^2 - (1 + cos theta)/(2 theta sin theta).
-KOKKOS_INLINE_FUNCTION void inverseLeftJacobian(const double theta[3], double J[3][3]) {
+// The deformational DOF d of an explicit element (6 N entries) from its nodes' positions and
+// unit quaternions, and the current frame E (rows), centroid and lengths the projector needs:
+// local translations E (x_a - x_c) - X_a (localTranslation) and local rotations
+// log(E R_a E0^T), taken as the rotation vector of the quaternion q_E q_a conj(q_E0): two
+// quaternion products per node instead of two 3 x 3 matrix products and a matrix logarithm.
+template <int N>
+KOKKOS_INLINE_FUNCTION void explicitDeformation(const ShellReference& reference, const double positions[][3],
+                                                const double quaternions[][4], double E[3][3], double centroid[3],
+                                                FrameLengths<double>& lengths, double d[]) {
+  corotationalFrame<N>(positions, E, centroid, lengths);
+  double frameQuaternion[4], referenceFrameQuaternion[4];
+  rotation::fromMatrix(E, frameQuaternion);
+  rotation::fromMatrix(reference.frame, referenceFrameQuaternion);
+  for (int a = 0; a < N; ++a) {
+    localTranslation(E, centroid, positions[a], reference.local[a], &d[6 * a]);
+    double turned[4], relative[4];
+    rotation::multiply(frameQuaternion, quaternions[a], turned);
+    rotation::multiplyByConjugate(turned, referenceFrameQuaternion, relative);
+    rotation::rotationVector(relative, &d[6 * a + 3]);
+  }
+}
+
+// J_l^-T(theta) m, J_l^-1 = d log(exp(delta) Q) / d delta the inverse left Jacobian of SO(3):
+// J_l^-1 = I - 1/2 [theta] + c [theta]^2, c = 1/theta^2 - (1 + cos theta)/(2 theta sin theta),
+// so J_l^-T m = m + 1/2 theta x m + c theta x (theta x m).
+KOKKOS_INLINE_FUNCTION void applyTransposedInverseLeftJacobian(const double theta[3], const double m[3], double out[3]) {
   const double angleSquared = theta[0] * theta[0] + theta[1] * theta[1] + theta[2] * theta[2];
   double c;
   if (angleSquared < 1e-4) {
@@ -22,12 +46,10 @@ KOKKOS_INLINE_FUNCTION void inverseLeftJacobian(const double theta[3], double J[
     c = 1.0 / angleSquared -
         (1.0 + Kokkos::Experimental::cos(angle)) / (2.0 * angle * Kokkos::Experimental::sin(angle));
   }
-  const double skew[3][3] = {{0.0, -theta[2], theta[1]}, {theta[2], 0.0, -theta[0]}, {-theta[1], theta[0], 0.0}};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) {
-      const double square = skew[i][0] * skew[0][j] + skew[i][1] * skew[1][j] + skew[i][2] * skew[2][j];
-      J[i][j] = (i == j ? 1.0 : 0.0) - 0.5 * skew[i][j] + c * square;
-    }
+  double once[3], twice[3];
+  rotation::cross(theta, m, once);
+  rotation::cross(theta, once, twice);
+  for (int k = 0; k < 3; ++k) out[k] = m[k] + 0.5 * once[k] + c * twice[k];
 }
 
 // force (6 N entries) = dW/dq from local[a] = dW/dd_a (u v w theta_x theta_y theta_z of node
@@ -40,9 +62,8 @@ KOKKOS_INLINE_FUNCTION void projectLocalForces(const double E[3][3], const doubl
   // M_a = E^T J^-T f_theta_a, and their total moment about the centroid.
   double moment[3] = {0.0, 0.0, 0.0}, forceSum[3] = {0.0, 0.0, 0.0};
   for (int a = 0; a < N; ++a) {
-    double J[3][3], rotational[3];
-    inverseLeftJacobian(&d[6 * a + 3], J);
-    for (int j = 0; j < 3; ++j) rotational[j] = J[0][j] * local[a][3] + J[1][j] * local[a][4] + J[2][j] * local[a][5];
+    double rotational[3];
+    applyTransposedInverseLeftJacobian(&d[6 * a + 3], &local[a][3], rotational);
     for (int k = 0; k < 3; ++k) {
       force[6 * a + k] = E[0][k] * local[a][0] + E[1][k] * local[a][1] + E[2][k] * local[a][2];
       force[6 * a + 3 + k] = E[0][k] * rotational[0] + E[1][k] * rotational[1] + E[2][k] * rotational[2];
@@ -60,7 +81,8 @@ KOKKOS_INLINE_FUNCTION void projectLocalForces(const double E[3][3], const doubl
   const double* last = positions[N - 1];
   double mu[3];
   for (int i = 0; i < 3; ++i) mu[i] = E[i][0] * moment[0] + E[i][1] * moment[1] + E[i][2] * moment[2];
-  const double normalSpin = mu[0] + mu[2] * lengths.alongNormal / lengths.along;
+  const double inverseAlong = 1.0 / lengths.along, inverseNormal = 1.0 / lengths.normal;
+  const double normalSpin = mu[0] + mu[2] * lengths.alongNormal * inverseAlong;
   double lever[3], diagonal13[3], diagonal24[3], toDiagonal13[3], toDiagonal24[3];
   for (int k = 0; k < 3; ++k) {
     lever[k] = mu[1] * E[0][k] - normalSpin * E[1][k];
@@ -70,8 +92,8 @@ KOKKOS_INLINE_FUNCTION void projectLocalForces(const double E[3][3], const doubl
   rotation::cross(diagonal24, lever, toDiagonal13);
   rotation::cross(lever, diagonal13, toDiagonal24);
   for (int k = 0; k < 3; ++k) {
-    const double g13 = toDiagonal13[k] / lengths.normal, g24 = toDiagonal24[k] / lengths.normal;
-    const double gAlong = mu[2] / lengths.along * E[1][k];
+    const double g13 = toDiagonal13[k] * inverseNormal, g24 = toDiagonal24[k] * inverseNormal;
+    const double gAlong = mu[2] * inverseAlong * E[1][k];
     const double shift = 0.25 * forceSum[k];
     force[k] += g13 + gAlong - shift;
     force[6 + k] += g24 - gAlong - shift;

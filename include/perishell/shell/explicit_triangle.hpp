@@ -156,11 +156,11 @@ KOKKOS_INLINE_FUNCTION double triangleLocalForces(const double x[3][2], const Sh
 }  // namespace detail
 
 // Internal force f = dW/dq of a triangle stored as a b c c (referencePositions: its 4
-// corners; positions and rotations: its 3 nodes'; force: 18 entries, the MITC4 element's
+// corners; positions and quaternions: its 3 nodes'; force: 18 entries, the MITC4 element's
 // order) with its section scaled by membraneBendingScale on the membrane and bending blocks
 // and Allman's term on quadraticEdges (mitc3_triangle.hpp). Returns the strain energy W.
 KOKKOS_INLINE_FUNCTION double explicitTriangleForce(const double referencePositions[4][3], const double positions[][3],
-                                                    const double rotations[][3][3], const ShellSection& section,
+                                                    const double quaternions[][4], const ShellSection& section,
                                                     double membraneBendingScale, unsigned quadraticEdges,
                                                     double force[triangleDofCount]) {
   const ShellReference reference = shellReference(referencePositions);
@@ -168,11 +168,7 @@ KOKKOS_INLINE_FUNCTION double explicitTriangleForce(const double referencePositi
   detail::triangleCorners(reference, corners);
   double E[3][3], centroid[3], d[triangleDofCount];
   detail::FrameLengths<double> lengths;
-  detail::corotationalFrame<3>(positions, E, centroid, lengths);
-  for (int a = 0; a < 3; ++a) {
-    detail::localTranslation(E, centroid, positions[a], reference.local[a], &d[6 * a]);
-    detail::localRotation(E, rotations[a], reference.frame, &d[6 * a + 3]);
-  }
+  detail::explicitDeformation<3>(reference, positions, quaternions, E, centroid, lengths, d);
   double local[3][6];
   const double energy = detail::triangleLocalForces(corners, section, membraneBendingScale, quadraticEdges, d, local);
   detail::projectLocalForces<3>(E, centroid, lengths, positions, d, local, force);

@@ -5,7 +5,8 @@
 // form, so that it is conservative and exactly invariant under rigid motions of any size:
 //  - kinematics as the MITC4 element's (shell/mitc4_shell.hpp, model.md §5): the same
 //    corotational frame, the deformational DOF d (local translations E (x_a - x_c) - X_a and
-//    local rotations log(E R_a E0^T));
+//    local rotations log(E R_a E0^T), the force kernel taking them from the nodes'
+//    quaternions: shell/corotational_projector.hpp);
 //  - generalised strains at the centre from the uniform gradient B of Flanagan & Belytschko
 //    (1981): membrane, curvature and the drilling mismatch theta_z - omega, with the section
 //    of model.md §4; the transverse shear (gamma = grad w + beta, beta = (theta_y, -theta_x))
@@ -29,7 +30,7 @@
 //    nodal forces are dW/dq exactly: f_local = dW/dd, mapped to the global DOF through the
 //    derivative of d, including the frame's spin (the corotational projector; derived in
 //    docs/explicit.md). No stiffness matrix, no automatic differentiation: about 600 flops
-//    and 40 doubles read per element.
+//    and 44 doubles read per element (positions, displacements, quaternions, section factors).
 // The coupling's hybrid section (model.md §4, coupling/morphing.hpp) enters as one factor
 // s on the membrane and bending resultants and on their hourglass stiffnesses: the mean of
 // the element's four Gauss-point factors, i.e. 1 - alphaBar at the centre, which
@@ -56,25 +57,30 @@ struct OnePointReference {
   double area;              // A of the flat projection
   double dNdx[4], dNdy[4];  // the uniform gradient at the centre
   double hourglass[4];      // Flanagan-Belytschko gamma_a
-  // d(shear)/d(w_a, theta_x_a, theta_y_a) of the four shear measures: gamma_xz, gamma_yz at
-  // the centre, then the opposite edges' covariant shear differences d_xi, d_eta.
-  double shearW[4][4], shearThetaX[4][4], shearThetaY[4][4];
-  // Per shear measure, its weight in int |gamma|^2 dA: A, A, A |J^-1 e_1|^2 / 12, A |J^-1 e_2|^2 / 12.
+  // Per shear measure (gamma_xz, gamma_yz at the centre, then the opposite edges' covariant
+  // shear differences d_xi, d_eta), its weight in int |gamma|^2 dA: A, A, A |J^-1 e_1|^2 / 12,
+  // A |J^-1 e_2|^2 / 12.
   double shearWeight[4];
   // The gradients of the natural coordinates at the centre, (dxi/dx, dxi/dy) and (deta/dx, deta/dy).
   double naturalGradient[2][2];
 };
+
+// MITC4's tying edges (model.md §5), as (from, to) corners: the xi-edges 0-1 at eta = -1 and
+// 3-2 at eta = +1, then the eta-edges 0-3 at xi = -1 and 1-2 at xi = +1. (Functions: device
+// code cannot read a namespace-scope array.)
+KOKKOS_INLINE_FUNCTION constexpr int tyingEdgeFrom(int edge) { return edge == 1 ? 3 : (edge == 3 ? 1 : 0); }
+KOKKOS_INLINE_FUNCTION constexpr int tyingEdgeTo(int edge) { return edge == 0 ? 1 : (edge == 2 ? 3 : 2); }
 
 KOKKOS_INLINE_FUNCTION OnePointReference onePointReference(const double referencePositions[4][3]) {
   OnePointReference r{};
   r.geometry = shellReference(referencePositions);
   const auto& x = r.geometry.local;
   r.area = 0.5 * ((x[2][0] - x[0][0]) * (x[3][1] - x[1][1]) - (x[3][0] - x[1][0]) * (x[2][1] - x[0][1]));
-  const double twiceArea = 2.0 * r.area;
+  const double inverseTwiceArea = 0.5 / r.area;  // one division: they cost tens of flops on a GPU
   for (int a = 0; a < 4; ++a) {
     const int next = (a + 1) % 4, previous = (a + 3) % 4;
-    r.dNdx[a] = (x[next][1] - x[previous][1]) / twiceArea;
-    r.dNdy[a] = (x[previous][0] - x[next][0]) / twiceArea;
+    r.dNdx[a] = (x[next][1] - x[previous][1]) * inverseTwiceArea;
+    r.dNdy[a] = (x[previous][0] - x[next][0]) * inverseTwiceArea;
   }
   double hx = 0.0, hy = 0.0;
   for (int a = 0; a < 4; ++a) {
@@ -86,45 +92,15 @@ KOKKOS_INLINE_FUNCTION OnePointReference onePointReference(const double referenc
     const double h = (a % 2 == 0) ? 1.0 : -1.0;
     r.hourglass[a] = 0.25 * (h - hx * r.dNdx[a] - hy * r.dNdy[a]);
   }
-  // Covariant shears e_xi = gamma . dx/dxi at the edge midpoints (0, +-1), e_eta at (+-1, 0),
-  // averaged to the centre, gamma = J^-1 (e_xi, e_eta) with J at the centre (rows dx/dxi,
-  // dx/deta). Node a's beta enters e_xi through its xi-edge's half tangent, e_eta through
-  // its eta-edge's; its w through its natural coordinates (1/4 xi_a, 1/4 eta_a).
+  // The centre's Jacobian (rows dx/dxi, dx/deta) and its inverse: gamma = J^-1 (e_xi, e_eta).
   const double jacobian[2][2] = {
       {0.25 * (-x[0][0] + x[1][0] + x[2][0] - x[3][0]), 0.25 * (-x[0][1] + x[1][1] + x[2][1] - x[3][1])},
       {0.25 * (-x[0][0] - x[1][0] + x[2][0] + x[3][0]), 0.25 * (-x[0][1] - x[1][1] + x[2][1] + x[3][1])}};
-  const double determinant = jacobian[0][0] * jacobian[1][1] - jacobian[0][1] * jacobian[1][0];
-  const double inverse[2][2] = {{jacobian[1][1] / determinant, -jacobian[0][1] / determinant},
-                                {-jacobian[1][0] / determinant, jacobian[0][0] / determinant}};
-  // The differences e_xi(0, 1) - e_xi(0, -1) and e_eta(1, 0) - e_eta(-1, 0): with
-  // e_xi(eta) = centre + eta/2 d_xi (MITC4's linear interpolation), int |gamma|^2 dA over a
-  // parallelogram is A |gamma_centre|^2 + A/12 (|J^-1 e_1|^2 d_xi^2 + |J^-1 e_2|^2 d_eta^2).
-  for (int a = 0; a < 4; ++a) {
-    const double xi = mesh::bilinear::nodeXi(a), eta = mesh::bilinear::nodeEta(a);
-    // The xi-edge (constant eta) and the eta-edge (constant xi) through node a.
-    const int xiEdge[2] = {eta > 0.0 ? 3 : 0, eta > 0.0 ? 2 : 1};
-    const int etaEdge[2] = {xi > 0.0 ? 1 : 0, xi > 0.0 ? 2 : 3};
-    double covariantW[2] = {0.25 * xi, 0.25 * eta}, covariantBeta[2][2];  // [e_xi, e_eta][beta_x, beta_y]
-    for (int k = 0; k < 2; ++k) {
-      covariantBeta[0][k] = 0.125 * (x[xiEdge[1]][k] - x[xiEdge[0]][k]);
-      covariantBeta[1][k] = 0.125 * (x[etaEdge[1]][k] - x[etaEdge[0]][k]);
-    }
-    for (int i = 0; i < 2; ++i) {
-      r.shearW[a][i] = inverse[i][0] * covariantW[0] + inverse[i][1] * covariantW[1];
-      const double betaX = inverse[i][0] * covariantBeta[0][0] + inverse[i][1] * covariantBeta[1][0];
-      const double betaY = inverse[i][0] * covariantBeta[0][1] + inverse[i][1] * covariantBeta[1][1];
-      r.shearThetaY[a][i] = betaX;    // beta_x = theta_y
-      r.shearThetaX[a][i] = -betaY;   // beta_y = -theta_x
-    }
-    // Node a's edge shears count with + on the edge at eta = 1 (xi = 1), - at eta = -1 (xi = -1).
-    const double h = (a % 2 == 0) ? 1.0 : -1.0;
-    for (int i = 0; i < 2; ++i) {
-      const double side = 2.0 * (i == 0 ? eta : xi);  // an edge's shear has twice its weight in the mean
-      r.shearW[a][2 + i] = 0.5 * h;
-      r.shearThetaY[a][2 + i] = side * covariantBeta[i][0];
-      r.shearThetaX[a][2 + i] = -side * covariantBeta[i][1];
-    }
-  }
+  const double inverseDeterminant = 1.0 / (jacobian[0][0] * jacobian[1][1] - jacobian[0][1] * jacobian[1][0]);
+  const double inverse[2][2] = {{jacobian[1][1] * inverseDeterminant, -jacobian[0][1] * inverseDeterminant},
+                                {-jacobian[1][0] * inverseDeterminant, jacobian[0][0] * inverseDeterminant}};
+  // With e_xi(eta) = centre + eta/2 d_xi (MITC4's linear interpolation), int |gamma|^2 dA
+  // over a parallelogram is A |gamma_centre|^2 + A/12 (|J^-1 e_1|^2 d_xi^2 + |J^-1 e_2|^2 d_eta^2).
   for (int k = 0; k < 2; ++k) {
     r.naturalGradient[0][k] = inverse[k][0];
     r.naturalGradient[1][k] = inverse[k][1];
@@ -216,7 +192,6 @@ KOKKOS_INLINE_FUNCTION void onePointStrains(const OnePointReference& r, const T 
                                             T curvature[3], T shear[4], T& drilling, T hourglass[5]) {
   for (int k = 0; k < 3; ++k) membrane[k] = curvature[k] = T(0.0);
   drilling = T(0.0);
-  for (int k = 0; k < 4; ++k) shear[k] = T(0.0);
   for (int k = 0; k < 5; ++k) hourglass[k] = T(0.0);
   for (int a = 0; a < 4; ++a) {
     const T* n = &d[6 * a];  // u v w theta_x theta_y theta_z
@@ -227,10 +202,25 @@ KOKKOS_INLINE_FUNCTION void onePointStrains(const OnePointReference& r, const T 
     curvature[0] += bx * n[4];                // d beta_x/dx, beta_x = theta_y
     curvature[1] -= by * n[3];                // d beta_y/dy, beta_y = -theta_x
     curvature[2] += by * n[4] - bx * n[3];
-    for (int i = 0; i < 4; ++i) shear[i] += r.shearW[a][i] * n[2] + r.shearThetaX[a][i] * n[3] + r.shearThetaY[a][i] * n[4];
     drilling += 0.25 * n[5] - 0.5 * (bx * n[1] - by * n[0]);
     for (int k = 0; k < 5; ++k) hourglass[k] += r.hourglass[a] * n[k < 2 ? k : k + 1];
   }
+  // MITC4's covariant shears at the tying edges' midpoints, e = dw/ds + beta . dx/ds along the
+  // edge (s its natural coordinate): (w_to - w_from)/2 + (beta_from + beta_to)/2 . (x_to - x_from)/2.
+  T covariant[4];
+  const auto& x = r.geometry.local;
+  for (int edge = 0; edge < 4; ++edge) {
+    const T* from = &d[6 * tyingEdgeFrom(edge)];
+    const T* to = &d[6 * tyingEdgeTo(edge)];
+    const double dx = x[tyingEdgeTo(edge)][0] - x[tyingEdgeFrom(edge)][0];
+    const double dy = x[tyingEdgeTo(edge)][1] - x[tyingEdgeFrom(edge)][1];
+    covariant[edge] = 0.5 * (to[2] - from[2]) + 0.25 * ((from[4] + to[4]) * dx - (from[3] + to[3]) * dy);
+  }
+  // The centre's (the opposite edges' means, mapped by J^-1), then the edges' differences.
+  const T alongXi = 0.5 * (covariant[0] + covariant[1]), alongEta = 0.5 * (covariant[2] + covariant[3]);
+  for (int i = 0; i < 2; ++i) shear[i] = r.naturalGradient[0][i] * alongXi + r.naturalGradient[1][i] * alongEta;
+  shear[2] = covariant[1] - covariant[0];
+  shear[3] = covariant[3] - covariant[2];
 }
 
 // The energy of the element's strains, split into the one-point part and the hourglass part.
@@ -295,18 +285,16 @@ struct OnePointEnergies {
 };
 
 // Internal force f = dW/dq (global translations, then spatial moments per node, as
-// shellInternalForce) and the element's energies.
+// shellInternalForce) and the element's energies; the nodes' rotations as unit quaternions.
 KOKKOS_INLINE_FUNCTION OnePointEnergies onePointShellForce(const double referencePositions[4][3],
-                                                          const double positions[4][3],
-                                                          const double rotations[4][3][3], const ShellSection& section,
-                                                          double membraneBendingScale, double force[shellDofCount]) {
+                                                          const double positions[4][3], const double quaternions[4][4],
+                                                          const ShellSection& section, double membraneBendingScale,
+                                                          double force[shellDofCount]) {
   const OnePointReference r = onePointReference(referencePositions);
   const detail::OnePointSection s = detail::onePointSection(r, section, membraneBendingScale);
-  double E[3][3], centroid[3];
+  double E[3][3], centroid[3], d[shellDofCount];
   detail::FrameLengths<double> lengths;
-  detail::corotationalFrame(positions, E, centroid, lengths);
-  double d[shellDofCount];
-  detail::onePointDeformation(r, E, centroid, positions, rotations, d);
+  detail::explicitDeformation<4>(r.geometry, positions, quaternions, E, centroid, lengths, d);
 
   double membrane[3], curvature[3], shear[4], drilling, hourglass[5];
   detail::onePointStrains(r, d, membrane, curvature, shear, drilling, hourglass);
@@ -349,11 +337,24 @@ KOKKOS_INLINE_FUNCTION OnePointEnergies onePointShellForce(const double referenc
     local[a][3] = -by * m[1] - bx * m[2] + g * hourglassForce[2];
     local[a][4] = bx * m[0] + by * m[2] + g * hourglassForce[3];
     local[a][5] = 0.25 * z + g * hourglassForce[4];
-    for (int i = 0; i < 4; ++i) {
-      local[a][2] += r.shearW[a][i] * q[i];
-      local[a][3] += r.shearThetaX[a][i] * q[i];
-      local[a][4] += r.shearThetaY[a][i] * q[i];
-    }
+  }
+  // The shears' forces back through onePointStrains' tying edges: dW/d(covariant edge shear),
+  // then onto the edge's w and beta = (theta_y, -theta_x).
+  const double alongXi = r.naturalGradient[0][0] * q[0] + r.naturalGradient[0][1] * q[1];
+  const double alongEta = r.naturalGradient[1][0] * q[0] + r.naturalGradient[1][1] * q[1];
+  const double covariantForce[4] = {0.5 * alongXi - q[2], 0.5 * alongXi + q[2], 0.5 * alongEta - q[3],
+                                    0.5 * alongEta + q[3]};
+  const auto& x = r.geometry.local;
+  for (int edge = 0; edge < 4; ++edge) {
+    const int from = tyingEdgeFrom(edge), to = tyingEdgeTo(edge);
+    const double f = covariantForce[edge];
+    const double betaX = 0.25 * f * (x[to][0] - x[from][0]), betaY = 0.25 * f * (x[to][1] - x[from][1]);
+    local[to][2] += 0.5 * f;
+    local[from][2] -= 0.5 * f;
+    local[from][4] += betaX;
+    local[to][4] += betaX;
+    local[from][3] -= betaY;
+    local[to][3] -= betaY;
   }
   detail::projectLocalForces<4>(E, centroid, lengths, positions, d, local, force);
   return energies;
@@ -361,29 +362,22 @@ KOKKOS_INLINE_FUNCTION OnePointEnergies onePointShellForce(const double referenc
 
 // The diagonal of the element's linear stiffness at its reference state, as means per node:
 // of the three translational and of the three rotational entries (the explicit solver's
-// rotary-inertia scaling, solvers/explicit/nodal_inertia.hpp).
+// rotary-inertia scaling, solvers/explicit/nodal_inertia.hpp). K_jj = 2 W(e_j): the energy is
+// quadratic in the deformational DOF, which at the reference state are the nodal DOF.
 KOKKOS_INLINE_FUNCTION void onePointShellNodalStiffness(const double referencePositions[4][3],
                                                         const ShellSection& section, double membraneBendingScale,
-                                                        double translational[4],
-                                                        double rotational[4]) {
+                                                        double translational[4], double rotational[4]) {
   const OnePointReference r = onePointReference(referencePositions);
   const detail::OnePointSection s = detail::onePointSection(r, section, membraneBendingScale);
-  const double A = r.area, shearPart = s.halfOneMinusPoisson;
   for (int a = 0; a < 4; ++a) {
-    const double bx2 = r.dNdx[a] * r.dNdx[a], by2 = r.dNdy[a] * r.dNdy[a], g2 = r.hourglass[a] * r.hourglass[a];
-    const double uu = A * (s.membrane * (bx2 + shearPart * by2) + 0.25 * s.drilling * by2) + s.hourglassMembrane * g2;
-    const double vv = A * (s.membrane * (by2 + shearPart * bx2) + 0.25 * s.drilling * bx2) + s.hourglassMembrane * g2;
-    const auto shear = [&](const double v[4]) {
-      double sum = 0.0;
-      for (int i = 0; i < 4; ++i) sum += r.shearWeight[i] * v[i] * v[i];
-      return s.transverseShear * sum;
-    };
-    const double ww = shear(r.shearW[a]);
-    const double xx = A * s.bending * (by2 + shearPart * bx2) + shear(r.shearThetaX[a]) + s.hourglassBending[2] * g2;
-    const double yy = A * s.bending * (bx2 + shearPart * by2) + shear(r.shearThetaY[a]) + s.hourglassBending[0] * g2;
-    const double zz = A * s.drilling / 16.0 + s.hourglassDrilling * g2;
-    translational[a] = (uu + vv + ww) / 3.0;
-    rotational[a] = (xx + yy + zz) / 3.0;
+    translational[a] = rotational[a] = 0.0;
+    for (int k = 0; k < 6; ++k) {
+      double unit[shellDofCount] = {};
+      unit[6 * a + k] = 1.0;
+      double pointEnergy, hourglassEnergy;
+      detail::onePointEnergy(r, s, unit, pointEnergy, hourglassEnergy);
+      (k < 3 ? translational : rotational)[a] += 2.0 * (pointEnergy + hourglassEnergy) / 3.0;
+    }
   }
 }
 
