@@ -171,7 +171,6 @@ KOKKOS_INLINE_FUNCTION void logarithm(const T R[3][3], T theta[3]) {
   for (int k = 0; k < 3; ++k) theta[k] = scale * axial[k];
 }
 
-
 // R(phi) = exp(phi) R to second order in phi: (I + Phi + Phi^2/2) R, Phi = skew(phi). The
 // implicit tangents seed phi with dual numbers at phi = 0, where only the first two
 // derivatives count, so this is exact for them.

@@ -307,15 +307,16 @@ namespace detail {
 // triangles, and each element takes the explicit triangle's branch or the quad's. A body of
 // quads only runs without that branch: fewer registers (246 against 254 per thread) and
 // 8 % less time per step at 1e6 elements on an H100 (docs/explicit.md).
-template <bool WithTriangles, class PolicyT, class MemorySpaceT>
-void launchOnePointForces(const PolicyT& policy, const ShellBody<MemorySpaceT>& body,
+template <bool WithTriangles, class ExecutionSpaceT, class MemorySpaceT>
+void launchOnePointForces(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
                           const pd::PdKinematics<MemorySpaceT>& state, const pd::NodalVectorView<MemorySpaceT>& forces,
                           const VectorView<MemorySpaceT>& energy, const VectorView<MemorySpaceT>& hourglassEnergy,
                           bool gather, bool withEnergy, bool withHourglass) {
   Kokkos::parallel_for(
-      "perishell::shell::onePointShellForces", policy, KOKKOS_LAMBDA(const LocalIndex e) {
+      "perishell::shell::onePointShellForces", queuedRangePolicy(space, 0, body.numElements()),
+      KOKKOS_LAMBDA(const LocalIndex e) {
         double reference[4][3], current[4][3], quaternions[4][4], force[shellDofCount];
-        detail::loadExplicitElement(body, state, e, reference, current, quaternions);
+        loadExplicitElement(body, state, e, reference, current, quaternions);
         const double scale = 0.25 * (body.membraneBendingScale(e, 0) + body.membraneBendingScale(e, 1) +
                                      body.membraneBendingScale(e, 2) + body.membraneBendingScale(e, 3));
         int corners = 4;
@@ -358,12 +359,11 @@ void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpa
   if (body.kind == ShellElementKind::OnePoint) {
     const bool withHourglass = hourglassEnergy.extent(0) > 0;
     const bool gather = body.assembly == ElementForceAssembly::Gather;
-    const auto policy = queuedRangePolicy(space, 0, body.numElements());
     if (body.hasTriangles)
-      detail::launchOnePointForces<true>(policy, body, state, forces, energy, hourglassEnergy, gather, withEnergy,
+      detail::launchOnePointForces<true>(space, body, state, forces, energy, hourglassEnergy, gather, withEnergy,
                                          withHourglass);
     else
-      detail::launchOnePointForces<false>(policy, body, state, forces, energy, hourglassEnergy, gather, withEnergy,
+      detail::launchOnePointForces<false>(space, body, state, forces, energy, hourglassEnergy, gather, withEnergy,
                                           withHourglass);
     if (!gather) return;
     Kokkos::parallel_for(
