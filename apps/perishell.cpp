@@ -359,8 +359,8 @@ int runDeck(const std::vector<std::string>& args) {
   perishell::installStopRequestHandlers();
   const bool isExplicit = deck.solver.type == perishell::deck::SolverType::Explicit;
   // Refusals are the same on every rank: before the ranks go their own ways.
-  if (isExplicit) perishell::solvers::requireDistributableExplicitRun(model, parsed.run);
-  if (!isExplicit) perishell::solvers::requireDistributableImplicitRun(model, parsed.run);
+  if (isExplicit) perishell::solvers::requireDistributableExplicitRun(model);
+  if (!isExplicit) perishell::solvers::requireDistributableImplicitRun(model);
   ranksMayDiverge = perishell::parallel::Communicator::world().distributed();
   const int stoppedBy = deck.solver.type == perishell::deck::SolverType::Explicit
                             ? perishell::solvers::runExplicit(model, parsed.run, std::cout).stoppedBySignal

@@ -358,15 +358,15 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   using MemorySpace = typename ExecutionSpaceT::memory_space;
   const auto communicator = parallel::Communicator::world();
   requireRunnableModel(model);
-  requireDistributableExplicitRun(model, runOptions);
+  requireDistributableExplicitRun(model);
   using Clock = std::chrono::steady_clock;
   const auto& deck = model.deck;
   // Before the set-up: a directory another run holds is refused at once. The root writes.
   std::optional<RunDirectory> runDirectory;
   if (communicator.root()) runDirectory.emplace(model, runOptions, "explicit", log);
   const std::string directory = runDirectory ? runDirectory->path() : std::string();
-  const std::optional<io::Checkpoint> noCheckpoint;
-  const auto& checkpoint = runDirectory ? runDirectory->checkpoint() : noCheckpoint;
+  const auto otherRanksCheckpoint = readCheckpointOnOtherRanks(model, runOptions, "explicit", communicator);
+  const auto& checkpoint = runDirectory ? runDirectory->checkpoint() : otherRanksCheckpoint;
   const auto& settings = deck.solver.explicitSettings;
   const auto setupStart = Clock::now();
   // Before the solver's set-up, so that a probe off the shell stops the run at once.
@@ -399,7 +399,7 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
       space, body, bodies.shellElements(), local ? local->actions : makeExternalActions<MemorySpace>(model), options,
       local ? local->distribution : parallel::NodeDistribution<MemorySpace>());
   const parallel::NodeGather gather(local ? &local->domain : nullptr, communicator, model.shell.mesh.numNodes());
-  if (checkpoint) solver.restoreFrom(*checkpoint);
+  if (checkpoint) solver.restoreFrom(*checkpoint, gather);
   const long long deckSteps =
       settings.steps ? *settings.steps
                      : std::max(1LL, static_cast<long long>(std::ceil(*settings.endTime / solver.timeStep() - 1e-9)));
@@ -452,7 +452,8 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   int checkpointsWritten = 0;
   const auto writeCheckpoint = [&] {
     io::Checkpoint state;
-    solver.saveTo(state);
+    solver.saveTo(state, gather);
+    if (!communicator.root()) return;
     output.saveTo(state);
     if (adaptive) putView(state, "adaptive.element-is-pd", adaptive->elementIsPd());
     state.putInteger("explicit-run.zone-switches", switches);
@@ -486,18 +487,17 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
     }
     // A stop request (SIGINT, SIGTERM) ends the run here, with this step written as the last;
     // on every rank at the same step.
+    // A checkpoint by the wall clock, on every rank at the same step too.
     stoppedBy = stopRequestSignal();
-    if (communicator.distributed()) stoppedBy = communicator.max(stoppedBy);
+    bool checkpointByClock = checkpointSchedule.dueByClock();
+    agreeOnRanks(communicator, stoppedBy, checkpointByClock);
     const bool last = step == totalSteps || stoppedBy != 0;
     const bool historyOnSchedule = step % historyEvery == 0;
     const bool fieldsOnSchedule = fieldEvery > 0 && step % fieldEvery == 0;
     // A checkpoint on its schedule, where the run stops before the deck's end (to be
     // continued), and at the deck's end when the deck asks for checkpoints (to be extended).
-    const bool checkpointDue = !communicator.distributed() && (checkpointSchedule.due(step) ||
-                                                              (last && (step < deckSteps || deck.output.checkpoints())));
-    if (communicator.distributed() && last && step < deckSteps)
-      log << "explicit: stopping at step " << step << " without a checkpoint: a run on " << communicator.size()
-          << " ranks does not write one yet (docs/parallel.md)\n";
+    const bool checkpointDue = checkpointSchedule.dueByStep(step) || checkpointByClock ||
+                               (last && (step < deckSteps || deck.output.checkpoints()));
     outputStart = Clock::now();
     if (last || historyOnSchedule || fieldsOnSchedule || checkpointDue) {
       const auto check = solver.checkState();
@@ -591,7 +591,7 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
 
 }  // namespace
 
-void requireDistributableExplicitRun(const model::Model& model, const RunOptions& options) {
+void requireDistributableExplicitRun(const model::Model& model) {
   const auto communicator = parallel::Communicator::world();
   if (!communicator.distributed()) return;
   const auto& deck = model.deck;
@@ -599,7 +599,6 @@ void requireDistributableExplicitRun(const model::Model& model, const RunOptions
   if (deck.zones.adaptive)
     throw std::invalid_argument(deck.sourceName + ": zones.adaptive: an adaptive PD zone is not supported" + ranks +
                                 " yet; run it on one rank, or set the PD zone in the deck");
-  requireNoCheckpointsOnRanks(model, options, communicator.size());
 }
 
 ExplicitRunSummary runExplicit(const model::Model& model, const RunOptions& options, std::ostream& log) {

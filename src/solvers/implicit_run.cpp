@@ -196,13 +196,13 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   using Clock = std::chrono::steady_clock;
   const auto& deck = model.deck;
   const auto communicator = parallel::Communicator::world();
-  requireDistributableImplicitRun(model, runOptions);
+  requireDistributableImplicitRun(model);
   // Before the set-up: a directory another run holds is refused at once. The root writes.
   std::optional<RunDirectory> runDirectory;
   if (communicator.root()) runDirectory.emplace(model, runOptions, "implicit", log);
   const std::string directory = runDirectory ? runDirectory->path() : std::string();
-  const std::optional<io::Checkpoint> noCheckpoint;
-  const auto& checkpoint = runDirectory ? runDirectory->checkpoint() : noCheckpoint;
+  const auto otherRanksCheckpoint = readCheckpointOnOtherRanks(model, runOptions, "implicit", communicator);
+  const auto& checkpoint = runDirectory ? runDirectory->checkpoint() : otherRanksCheckpoint;
   const auto& settings = deck.solver.implicitSettings;
   const bool arcLength = settings.control == deck::ImplicitSettings::Control::ArcLength;
   // Under arc-length control the run ends at load factor 1; maxIncrements bounds it.
@@ -228,7 +228,7 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   std::vector<long long> counters(11, 0);
   double maxDisplacement = 0.0;
   if (checkpoint) {
-    solver.restoreFrom(*checkpoint);
+    solver.restoreFrom(*checkpoint, gather);
     counters = checkpoint->integers("implicit-run.counters");
     if (counters.size() != 11)
       throw io::CheckpointError(checkpoint->context() + "'implicit-run.counters' is not of this version");
@@ -298,7 +298,8 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   int checkpointsWritten = 0;
   const auto writeCheckpoint = [&](int increment) {
     io::Checkpoint state;
-    solver.saveTo(state);
+    solver.saveTo(state, gather);
+    if (!communicator.root()) return;
     putOutputPosition(state, output.position());
     state.putIntegers("implicit-run.counters",
                       {increment, summary.newtonIterations, summary.linearIterations, summary.cuts,
@@ -371,8 +372,10 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
     summary.preconditionerBuilds += report.preconditionerBuilds;
     taken = increment;
     // A stop request (SIGINT, SIGTERM) ends the run after this converged increment, written.
+    // A checkpoint by the wall clock, on every rank after the same increment too.
     summary.stoppedBySignal = stopRequestSignal();
-    if (communicator.distributed()) summary.stoppedBySignal = communicator.max(summary.stoppedBySignal);
+    bool checkpointByClock = checkpointSchedule.dueByClock();
+    agreeOnRanks(communicator, summary.stoppedBySignal, checkpointByClock);
     const bool deckEnd = increment == deckIncrements || (arcLength && solver.loadFactor() >= 1.0);
     reachedDeckEnd = deckEnd;
     const bool last = increment == increments || deckEnd || summary.stoppedBySignal != 0;
@@ -380,11 +383,8 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
     const bool fieldsOnSchedule = deck.output.every > 0 && increment % deck.output.every == 0;
     // A checkpoint on its schedule, where the run stops before the deck's end (to be
     // continued), and at the deck's end when the deck asks for checkpoints (to be extended).
-    const bool checkpointDue = !communicator.distributed() && (checkpointSchedule.due(increment) ||
-                                                               (last && (!deckEnd || deck.output.checkpoints())));
-    if (communicator.distributed() && last && !deckEnd)
-      log << "implicit: stopping at increment " << increment << " without a checkpoint: a run on "
-          << communicator.size() << " ranks writes none yet (docs/parallel.md)\n";
+    const bool checkpointDue = checkpointSchedule.dueByStep(increment) || checkpointByClock ||
+                               (last && (!deckEnd || deck.output.checkpoints()));
     outputStart = Clock::now();
     if (last || historyOnSchedule || fieldsOnSchedule || checkpointDue)
       requireHealthyState(model, solver, increment, deckIncrements, gather, communicator);
@@ -472,7 +472,7 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
 
 }  // namespace
 
-void requireDistributableImplicitRun(const model::Model& model, const RunOptions& options) {
+void requireDistributableImplicitRun(const model::Model& model) {
   const auto communicator = parallel::Communicator::world();
   if (!communicator.distributed()) return;
   const auto& deck = model.deck;
@@ -481,7 +481,6 @@ void requireDistributableImplicitRun(const model::Model& model, const RunOptions
     throw std::invalid_argument(deck.sourceName + ": solver.preconditioner: direct factors the whole tangent, which no "
                                 "rank holds" + ranks + "; use cholesky (each rank's block factored, preconditioning "
                                 "CG over all ranks), amg or block-jacobi");
-  requireNoCheckpointsOnRanks(model, options, communicator.size());
 }
 
 ImplicitRunSummary runImplicit(const model::Model& model, const RunOptions& options, std::ostream& log) {

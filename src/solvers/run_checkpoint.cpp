@@ -32,10 +32,17 @@ std::string checkpointPath(const std::string& directory) {
 CheckpointSchedule::CheckpointSchedule(const deck::Output& output)
     : every_(output.checkpointEvery), minutes_(output.checkpointMinutes), last_(std::chrono::steady_clock::now()) {}
 
-bool CheckpointSchedule::due(long long step) const {
-  if (every_ > 0 && step % every_ == 0) return true;
+bool CheckpointSchedule::dueByClock() const {
   return minutes_ > 0.0 &&
          std::chrono::duration<double>(std::chrono::steady_clock::now() - last_).count() >= 60.0 * minutes_;
+}
+
+void agreeOnRanks(const parallel::Communicator& communicator, int& stopSignal, bool& checkpointByClock) {
+  if (!communicator.distributed()) return;
+  double votes[2] = {static_cast<double>(stopSignal), checkpointByClock ? 1.0 : 0.0};
+  communicator.max(votes, 2);
+  stopSignal = static_cast<int>(votes[0]);
+  checkpointByClock = votes[1] > 0.0;
 }
 
 // Field steps as the checkpoint keeps them: their times, and per step a line
@@ -104,14 +111,13 @@ io::Checkpoint readRunCheckpoint(const std::string& directory, const model::Mode
   return checkpoint;
 }
 
-void requireNoCheckpointsOnRanks(const model::Model& model, const RunOptions& options, int ranks) {
-  if (ranks <= 1) return;
-  if (model.deck.output.checkpoints())
-    throw std::invalid_argument(model.deck.sourceName + ": output.checkpoint-every: checkpoints are not written in a run "
-                                "on " + std::to_string(ranks) + " ranks yet; leave the key out or run on one rank");
-  if (!options.restartDirectory.empty())
-    throw std::invalid_argument("--restart: a run on " + std::to_string(ranks) +
-                                " ranks cannot continue a checkpoint yet; restart on one rank");
+std::optional<io::Checkpoint> readCheckpointOnOtherRanks(const model::Model& model, const RunOptions& options,
+                                                         const std::string& solver,
+                                                         const parallel::Communicator& communicator) {
+  if (!communicator.distributed() || options.restartDirectory.empty()) return std::nullopt;
+  communicator.broadcast(std::string());  // after the root's check: an error there ends every rank
+  if (communicator.root()) return std::nullopt;
+  return readRunCheckpoint(runDirectoryPath(model, options), model, solver);
 }
 
 }  // namespace perishell::solvers

@@ -13,8 +13,13 @@ within TOL of the column's or dataset's largest magnitude; the solver's counters
 Krylov iterations, cuts, residual) are not compared, and the Krylov iterations are printed for
 each rank count.
 
+--restart-at N: checkpoints across rank counts. Each rank count also runs the deck's first N
+steps (increments), which ends in a checkpoint, and the next rank count in the list (the last
+the first) continues it with --restart: the continued run's files are compared with the first
+rank count's uninterrupted run as above (bit for bit, or within TOL).
+
 usage: compare_rank_counts.py --app PERISHELL --mpirun MPIRUN --deck DECK --work DIR [--ranks 1,2,3]
-                              [--relative-tolerance TOL]
+                              [--relative-tolerance TOL] [--restart-at N]
        compare_rank_counts.py --compare-only --deck DECK --work DIR [...]: compares the
                               directories DIR/ranks-N another machine wrote (a GPU run).
 """
@@ -30,11 +35,10 @@ import h5py
 import numpy as np
 
 
-def run(app, mpirun, deck, ranks, directory):
+def run(app, mpirun, deck, ranks, options):
     env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1")
-    command = [mpirun, "-np", str(ranks), "--oversubscribe", "--bind-to", "none", app, "run", deck,
-               "--output", directory]
+    command = [mpirun, "-np", str(ranks), "--oversubscribe", "--bind-to", "none", app, "run", deck] + options
     result = subprocess.run(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     if result.returncode != 0:
         sys.exit(f"FAIL: {' '.join(command)} exited {result.returncode}:\n{result.stdout[-4000:]}")
@@ -42,9 +46,11 @@ def run(app, mpirun, deck, ranks, directory):
 
 
 def datasets(directory):
-    """Every dataset of every .h5 file in directory: {(file, path): array}."""
+    """Every dataset of every .h5 file in directory but the checkpoint: {(file, path): array}."""
     found = {}
     for path in sorted(glob.glob(os.path.join(directory, "*.h5"))):
+        if os.path.basename(path) == "checkpoint.h5":
+            continue
         with h5py.File(path, "r") as handle:
             def visit(name, item):
                 if isinstance(item, h5py.Dataset):
@@ -62,6 +68,7 @@ def main():
     parser.add_argument("--work", required=True)
     parser.add_argument("--ranks", default="1,2,3")
     parser.add_argument("--relative-tolerance", type=float, default=None)
+    parser.add_argument("--restart-at", type=int, default=None)
     args = parser.parse_args()
     counts = [int(r) for r in args.ranks.split(",")]
     if not args.compare_only:
@@ -75,9 +82,22 @@ def main():
         outputs[ranks] = directory
         if args.compare_only:
             continue
-        log = run(args.app, args.mpirun, args.deck, ranks, directory)
+        log = run(args.app, args.mpirun, args.deck, ranks, ["--output", directory])
         partition = [line for line in log.splitlines() if line.startswith("partition:") or "imbalance" in line]
         print(f"{ranks} rank(s): {' '.join(partition) if partition else 'one rank'}")
+    if args.restart_at is not None:
+        for first, then in zip(counts, counts[1:] + counts[:1]):
+            label = f"{first}-then-{then}"
+            directory = os.path.join(args.work, f"ranks-{label}")
+            outputs[label] = directory
+            if args.compare_only:
+                continue
+            run(args.app, args.mpirun, args.deck, first, ["--output", directory, "--max-steps", str(args.restart_at)])
+            log = run(args.app, args.mpirun, args.deck, then, ["--restart", directory])
+            if "restart: continuing " not in log:
+                sys.exit(f"FAIL: the run on {then} rank(s) did not continue the checkpoint of {first}:\n{log[-4000:]}")
+            print(f"{first} rank(s) to step {args.restart_at}, continued on {then} rank(s)")
+    counts = list(outputs)
 
     reference = outputs[counts[0]]
     if args.relative_tolerance is not None:
@@ -110,7 +130,8 @@ def main():
         print(f"{ranks} ranks: history.csv and {len(fields)} datasets compared with {counts[0]} rank(s)")
     if failures:
         sys.exit("FAIL:\n  " + "\n  ".join(failures))
-    print(f"PASS: {args.deck} gives identical files on {args.ranks} ranks")
+    print(f"PASS: {args.deck} gives identical files on {args.ranks} ranks"
+          + (" and continued across rank counts" if args.restart_at is not None else ""))
 
 
 SOLVER_COUNTERS = {"increment", "newton-iterations", "linear-iterations", "cuts", "relative-residual"}
@@ -193,7 +214,8 @@ def compare_within(args, counts, outputs):
     print("Krylov iterations over the run: " + ", ".join(f"{r} rank(s) {k}" for r, k in krylov.items()))
     if failures:
         sys.exit("FAIL:\n  " + "\n  ".join(failures))
-    print(f"PASS: {args.deck} gives the same answers within {args.relative_tolerance:g} on {args.ranks} ranks")
+    print(f"PASS: {args.deck} gives the same answers within {args.relative_tolerance:g} on {args.ranks} ranks"
+          + (" and continued across rank counts" if args.restart_at is not None else ""))
 
 
 if __name__ == "__main__":

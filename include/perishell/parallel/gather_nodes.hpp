@@ -1,8 +1,11 @@
 #pragma once
 // Nodal fields of a distributed run brought together on the root, in mesh-node order, for
-// output (docs/parallel.md): each rank sends its owned nodes' rows; the root writes the one
-// file set a single-rank run writes. On a single rank, a host copy.
+// output and checkpoints (docs/parallel.md): each rank sends its owned nodes' rows; the root
+// writes the one file set a single-rank run writes. On a single rank, a host copy. And back:
+// a checkpoint's mesh-ordered rows handed to every rank's local nodes, so that a run continues
+// on any rank count.
 #include <perishell/core/types.hpp>
+#include <perishell/io/checkpoint.hpp>
 #include <perishell/parallel/communicator.hpp>
 #include <perishell/parallel/domain.hpp>
 
@@ -17,6 +20,7 @@ class NodeGather {
   NodeGather(const LocalDomain* domain, const Communicator& communicator, LocalIndex numMeshNodes)
       : communicator_(communicator), numMeshNodes_(numMeshNodes) {
     if (!domain || !communicator.distributed()) return;
+    meshNodeOfLocal_.assign(domain->nodes.begin(), domain->nodes.end());
     std::vector<long long> mine;
     for (LocalIndex k = 0; k < domain->numNodes(); ++k)
       if (domain->owned[k]) {
@@ -28,6 +32,9 @@ class NodeGather {
   }
 
   bool root() const { return communicator_.root(); }
+  const Communicator& communicator() const { return communicator_; }
+  // The mesh node of a local node.
+  long long meshNode(LocalIndex local) const { return distributed_ ? meshNodeOfLocal_[local] : local; }
 
   // The view's rows (nodes x columns, or nodes) of every mesh node on the root; empty on the
   // other ranks. Collective.
@@ -58,12 +65,51 @@ class NodeGather {
     return result;
   }
 
+  // Rows in mesh-node order (numMeshNodes x columns, row-major, as gather returns them) into
+  // `view`'s rows of every local node, owned and halo alike (a halo node takes its owner's
+  // values). False, `view` unchanged, when `rows` does not hold numMeshNodes x columns values.
+  template <class ViewT, class ValueT>
+  bool scatter(const std::vector<ValueT>& rows, const ViewT& view) const {
+    const std::size_t columns = ViewT::rank == 1 ? 1 : view.extent(1);
+    if (rows.size() != static_cast<std::size_t>(numMeshNodes_) * columns) return false;
+    auto local = Kokkos::create_mirror_view(Kokkos::HostSpace{}, view);
+    for (std::size_t k = 0; k < local.extent(0); ++k)
+      for (std::size_t c = 0; c < columns; ++c) {
+        const auto value = rows[static_cast<std::size_t>(meshNode(static_cast<LocalIndex>(k))) * columns + c];
+        if constexpr (ViewT::rank == 1) local(k) = value;
+        else local(k, c) = value;
+      }
+    Kokkos::deep_copy(view, local);
+    return true;
+  }
+
  private:
   Communicator communicator_;
   LocalIndex numMeshNodes_ = 0;
   bool distributed_ = false;
   std::vector<LocalIndex> ownedLocal_;
+  std::vector<LocalIndex> meshNodeOfLocal_;  // distributed: the mesh node of every local node
   std::vector<long long> meshNodeOfRow_;  // root: the mesh node of each gathered row
 };
+
+// A nodal view as a checkpoint entry in mesh-node order, the same on any rank count: gathered
+// to the root, which alone writes the checkpoint (other ranks put nothing). Collective.
+template <class ViewT>
+void putNodalView(io::Checkpoint& checkpoint, const std::string& name, const ViewT& view, const NodeGather& gather) {
+  const auto rows = gather.gather(view);
+  if (gather.root()) io::putView(checkpoint, name, rows);
+}
+
+// The entry back into every local node's rows of `view`; throws io::CheckpointError naming the
+// entry and `mismatch` (what another length means) when it is not one row per mesh node.
+template <class ViewT>
+void takeNodalView(const io::Checkpoint& checkpoint, const std::string& name, const ViewT& view,
+                   const NodeGather& gather, const std::string& mismatch) {
+  static_assert(std::is_same_v<typename ViewT::non_const_value_type, double>, "nodal checkpoint entries are reals");
+  const auto& rows = checkpoint.reals(name);
+  if (!gather.scatter(rows, view))
+    throw io::CheckpointError(checkpoint.context() + "'" + name + "' holds " + std::to_string(rows.size()) +
+                              " values, not one row per node of this model: " + mismatch);
+}
 
 }  // namespace perishell::parallel

@@ -10,6 +10,7 @@
 #include <perishell/io/output_directory.hpp>
 #include <perishell/io/xdmf_writer.hpp>
 #include <perishell/model/model.hpp>
+#include <perishell/parallel/communicator.hpp>
 #include <perishell/solvers/run_options.hpp>
 
 #include <chrono>
@@ -39,16 +40,21 @@ class RunDirectory {
 // DIR/checkpoint.h5.
 std::string checkpointPath(const std::string& directory);
 
-// A distributed run writes and reads no checkpoint yet (docs/parallel.md): throws
-// std::invalid_argument naming output.checkpoint-every or --restart when ranks > 1.
-void requireNoCheckpointsOnRanks(const model::Model& model, const RunOptions& options, int ranks);
+// A restart of a distributed run: the root's RunDirectory has read and checked the checkpoint;
+// once it has, every other rank reads the same file (each takes its nodes' rows from it).
+// Empty on the root, on a single rank and without --restart. Collective.
+std::optional<io::Checkpoint> readCheckpointOnOtherRanks(const model::Model& model, const RunOptions& options,
+                                                         const std::string& solver,
+                                                         const parallel::Communicator& communicator);
 
 // When checkpoints are due: every output.checkpoint-every steps (increments) and/or minutes
 // of wall time since the last one (or the run's start).
 class CheckpointSchedule {
  public:
   explicit CheckpointSchedule(const deck::Output& output);
-  bool due(long long step) const;
+  bool dueByStep(long long step) const { return every_ > 0 && step % every_ == 0; }
+  // This rank's clock: a distributed run agrees on it first (agreeOnRanks).
+  bool dueByClock() const;
   void written() { last_ = std::chrono::steady_clock::now(); }
 
  private:
@@ -56,6 +62,11 @@ class CheckpointSchedule {
   double minutes_ = 0.0;
   std::chrono::steady_clock::time_point last_;
 };
+
+// A stop request (a signal's number, 0 for none) and a checkpoint by the wall clock, made the
+// same on every rank (the maxima over the ranks) in one reduction: each rank has its own clock
+// and may get the signal alone. A no-op on a single rank. Collective.
+void agreeOnRanks(const parallel::Communicator& communicator, int& stopSignal, bool& checkpointByClock);
 
 // How far the outputs had got on the run's schedule: the history rows and the field steps.
 struct OutputPosition {

@@ -23,6 +23,7 @@
 #include <perishell/fracture/carry_broken_bonds.hpp>
 #include <perishell/fracture/damage.hpp>
 #include <perishell/io/checkpoint.hpp>
+#include <perishell/parallel/gather_nodes.hpp>
 #include <perishell/parallel/node_distribution.hpp>
 #include <perishell/parallel/reproducible_sum.hpp>
 #include <perishell/pd/bond_forces.hpp>
@@ -39,6 +40,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace perishell::solvers {
@@ -236,39 +238,40 @@ class CentralDifferenceSolver {
   }
 
   // The state between two steps, for a checkpoint (io/checkpoint.hpp, entries "explicit.*"):
-  // displacements, rotations, half-step velocities, intact bonds, the per-node energy
-  // accumulators, and time, step, dt, critical step and initial energy. Everything else
-  // (forces, scratch, the monitor's strain and kinetic energy) is recomputed before it is read.
-  void saveTo(io::Checkpoint& checkpoint) const {
-    requireSingleRank("a checkpoint");
-    putView(checkpoint, "explicit.displacements", state_.displacements);
-    putView(checkpoint, "explicit.rotations", state_.rotations);
-    putView(checkpoint, "explicit.velocities", velocities_);
-    putView(checkpoint, "explicit.intact-bonds", intact_);
-    putView(checkpoint, "explicit.fracture-energy", fractureEnergy_);
-    putView(checkpoint, "explicit.external-work", externalWork_);
-    putView(checkpoint, "explicit.support-work", supportWork_);
-    putView(checkpoint, "explicit.damping-work", dampingWork_);
+  // displacements, rotations, half-step velocities, the per-node energy accumulators (each in
+  // mesh-node order), the broken bonds (mesh-node pairs), and time, step, dt, critical step and
+  // initial energy. Everything else (forces, scratch, the monitor's strain and kinetic energy)
+  // is recomputed before it is read. The entries are those of a single-rank run on any rank
+  // count; the root holds them (parallel/gather_nodes.hpp). Collective.
+  void saveTo(io::Checkpoint& checkpoint, const parallel::NodeGather& gather) const {
+    parallel::putNodalView(checkpoint, "explicit.displacements", state_.displacements, gather);
+    parallel::putNodalView(checkpoint, "explicit.rotations", state_.rotations, gather);
+    parallel::putNodalView(checkpoint, "explicit.velocities", velocities_, gather);
+    parallel::putNodalView(checkpoint, "explicit.fracture-energy", fractureEnergy_, gather);
+    parallel::putNodalView(checkpoint, "explicit.external-work", externalWork_, gather);
+    parallel::putNodalView(checkpoint, "explicit.support-work", supportWork_, gather);
+    parallel::putNodalView(checkpoint, "explicit.damping-work", dampingWork_, gather);
+    checkpoint.putIntegers("explicit.broken-bonds", brokenBondPairs(gather));
     checkpoint.putReals("explicit.clock", {time_, timeStep_, criticalTimeStep_, initialEnergy_});
     checkpoint.putInteger("explicit.step", step_);
   }
 
-  // Continues from saveTo's state: a solver over the same bodies (with an adaptive zone, those
-  // of the zone the checkpoint recorded) then steps on bit for bit as the saved one would have.
-  // Throws io::CheckpointError when the checkpoint's sizes are not this model's.
-  void restoreFrom(const io::Checkpoint& checkpoint) {
-    requireSingleRank("a restart");
+  // Continues from saveTo's state: a solver over the same model (with an adaptive zone, the
+  // bodies of the zone the checkpoint recorded), on this or any other rank count, then steps on
+  // bit for bit as the saved one would have. Every rank reads the checkpoint; a halo node takes
+  // its owner's state. Throws io::CheckpointError when the checkpoint is not of this model.
+  // Collective.
+  void restoreFrom(const io::Checkpoint& checkpoint, const parallel::NodeGather& gather) {
     const std::string mismatch = "the deck's model is not the one the checkpoint's run solved (another mesh, zones or "
                                  "horizon)";
-    takeView(checkpoint, "explicit.displacements", state_.displacements, mismatch);
-    takeView(checkpoint, "explicit.rotations", state_.rotations, mismatch);
-    takeView(checkpoint, "explicit.velocities", velocities_, mismatch);
-    takeView(checkpoint, "explicit.intact-bonds", intact_, mismatch);
-    Kokkos::deep_copy(space_, intactNext_, intact_);
-    takeView(checkpoint, "explicit.fracture-energy", fractureEnergy_, mismatch);
-    takeView(checkpoint, "explicit.external-work", externalWork_, mismatch);
-    takeView(checkpoint, "explicit.support-work", supportWork_, mismatch);
-    takeView(checkpoint, "explicit.damping-work", dampingWork_, mismatch);
+    parallel::takeNodalView(checkpoint, "explicit.displacements", state_.displacements, gather, mismatch);
+    parallel::takeNodalView(checkpoint, "explicit.rotations", state_.rotations, gather, mismatch);
+    parallel::takeNodalView(checkpoint, "explicit.velocities", velocities_, gather, mismatch);
+    parallel::takeNodalView(checkpoint, "explicit.fracture-energy", fractureEnergy_, gather, mismatch);
+    parallel::takeNodalView(checkpoint, "explicit.external-work", externalWork_, gather, mismatch);
+    parallel::takeNodalView(checkpoint, "explicit.support-work", supportWork_, gather, mismatch);
+    parallel::takeNodalView(checkpoint, "explicit.damping-work", dampingWork_, gather, mismatch);
+    restoreBrokenBonds(checkpoint, gather, mismatch);
     const auto& clock = checkpoint.reals("explicit.clock");
     if (clock.size() != 4) throw io::CheckpointError(checkpoint.context() + "'explicit.clock' holds " +
                                                      std::to_string(clock.size()) + " values, not 4");
@@ -314,6 +317,57 @@ class CentralDifferenceSolver {
         broken);
     return distribution_.communicator().sum(broken);
   }
+  // The broken bonds as mesh-node pairs (i < j), ascending, on the root: one list for any rank
+  // count, each bond sent by the rank owning its first node. Collective; checkpoints only.
+  std::vector<long long> brokenBondPairs(const parallel::NodeGather& gather) const {
+    const auto intact = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, intact_);
+    const auto halfBonds = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body_.bonds.halfBonds);
+    const auto owned = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, distribution_.owned());
+    const bool everyNodeOwned = owned.extent(0) == 0;
+    std::vector<long long> mine;
+    for (std::size_t b = 0; b < intact.extent(0); ++b)
+      if (!intact(b) && (everyNodeOwned || owned(halfBonds(b, 0)))) {
+        mine.push_back(gather.meshNode(halfBonds(b, 0)));
+        mine.push_back(gather.meshNode(halfBonds(b, 1)));
+      }
+    const auto all = distribution_.communicator().gather(mine);
+    std::vector<std::pair<long long, long long>> pairs;
+    for (std::size_t k = 0; k + 1 < all.size(); k += 2)
+      pairs.emplace_back(std::min(all[k], all[k + 1]), std::max(all[k], all[k + 1]));
+    std::sort(pairs.begin(), pairs.end());
+    std::vector<long long> sorted;
+    for (const auto& [i, j] : pairs) sorted.insert(sorted.end(), {i, j});
+    return sorted;
+  }
+
+  // Every local bond intact unless the checkpoint lists its nodes; every listed bond must be
+  // one of this model's (counted over the ranks, each on the owner of its first node).
+  void restoreBrokenBonds(const io::Checkpoint& checkpoint, const parallel::NodeGather& gather,
+                          const std::string& mismatch) {
+    const auto& listed = checkpoint.integers("explicit.broken-bonds");
+    if (listed.size() % 2 != 0)
+      throw io::CheckpointError(checkpoint.context() + "'explicit.broken-bonds' does not hold node pairs");
+    std::vector<std::pair<long long, long long>> broken;
+    for (std::size_t k = 0; k < listed.size(); k += 2) broken.emplace_back(listed[k], listed[k + 1]);
+    std::sort(broken.begin(), broken.end());
+    const auto halfBonds = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body_.bonds.halfBonds);
+    const auto owned = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, distribution_.owned());
+    auto intact = Kokkos::create_mirror_view(Kokkos::HostSpace{}, intact_);
+    long long found = 0;
+    for (std::size_t b = 0; b < intact.extent(0); ++b) {
+      const long long i = gather.meshNode(halfBonds(b, 0)), j = gather.meshNode(halfBonds(b, 1));
+      const bool isBroken = std::binary_search(broken.begin(), broken.end(), std::make_pair(std::min(i, j), std::max(i, j)));
+      intact(b) = isBroken ? 0 : 1;
+      if (isBroken && (owned.extent(0) == 0 || owned(halfBonds(b, 0)))) ++found;
+    }
+    found = distribution_.communicator().sum(found);
+    if (found != static_cast<long long>(broken.size()))
+      throw io::CheckpointError(checkpoint.context() + "'explicit.broken-bonds' lists " + std::to_string(broken.size()) +
+                                " broken bonds, of which this model has " + std::to_string(found) + ": " + mismatch);
+    Kokkos::deep_copy(intact_, intact);
+    Kokkos::deep_copy(space_, intactNext_, intact_);
+  }
+
   void computeDamage(const VectorView<MemorySpace>& damage) const {
     fracture::computeDamage(space_, body_, intact_, damage);
   }

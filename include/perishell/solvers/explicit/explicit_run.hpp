@@ -38,8 +38,8 @@ struct ExplicitRunSummary {
 ExplicitRunSummary runExplicit(const model::Model& model, const RunOptions& options, std::ostream& log);
 
 // Under mpirun (docs/parallel.md): throws std::invalid_argument, naming the deck key or option,
-// for what a distributed explicit run does not support yet (an adaptive zone, checkpoints, a
-// restart). The same on every rank; runExplicit checks it too.
-void requireDistributableExplicitRun(const model::Model& model, const RunOptions& options);
+// for what a distributed explicit run does not support yet (an adaptive zone). The same on
+// every rank; runExplicit checks it too.
+void requireDistributableExplicitRun(const model::Model& model);
 
 }  // namespace perishell::solvers

@@ -32,7 +32,7 @@ struct ImplicitRunSummary {
 ImplicitRunSummary runImplicit(const model::Model& model, const RunOptions& options, std::ostream& log);
 
 // Under mpirun: throws std::invalid_argument naming the deck key or option that a distributed
-// implicit run refuses (the direct preconditioner, checkpoints, --restart). The same on every rank.
-void requireDistributableImplicitRun(const model::Model& model, const RunOptions& options);
+// implicit run refuses (the direct preconditioner). The same on every rank.
+void requireDistributableImplicitRun(const model::Model& model);
 
 }  // namespace perishell::solvers

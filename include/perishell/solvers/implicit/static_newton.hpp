@@ -20,6 +20,7 @@
 #include <perishell/solvers/explicit/external_actions.hpp>
 #include <perishell/solvers/multigrid/smoothed_aggregation.hpp>
 #include <perishell/solvers/state_check.hpp>
+#include <perishell/parallel/gather_nodes.hpp>
 #include <perishell/parallel/node_distribution.hpp>
 
 #include <chrono>
@@ -245,13 +246,16 @@ class StaticNewtonSolver {
 
   // The converged state between increments, for a checkpoint (io/checkpoint.hpp, entries
   // "implicit.*"): displacements, rotations, the load factor and where the supports stand, the
-  // next sub-step's size, the preconditioner in use, and the arc-length state.
-  void saveTo(io::Checkpoint& checkpoint) const;
-  // Continues from saveTo's state on a solver of the same model. Where the saved solver held a
-  // fresh factor of the converged tangent, the same factor is made again here, so the next
-  // increment runs as the saved solver's would have (bit for bit on one backend and build).
-  // Throws io::CheckpointError when the checkpoint's sizes are not this model's.
-  void restoreFrom(const io::Checkpoint& checkpoint);
+  // next sub-step's size, the preconditioner in use, and the arc-length state. Nodal entries in
+  // mesh-node order, as a single-rank run writes them, on the root (parallel/gather_nodes.hpp).
+  // Collective.
+  void saveTo(io::Checkpoint& checkpoint, const parallel::NodeGather& gather) const;
+  // Continues from saveTo's state on a solver of the same model, on this or any other rank
+  // count. Where the saved solver held a fresh factor of the converged tangent, the same factor
+  // is made again here, so the next increment runs as the saved solver's would have (bit for
+  // bit on one backend, build and rank count). Throws io::CheckpointError when the checkpoint
+  // is not of this model. Collective.
+  void restoreFrom(const io::Checkpoint& checkpoint, const parallel::NodeGather& gather);
 
   double loadFactor() const { return loadFactor_; }
   // Called after every Newton iteration and every cut with the load factor being tried and

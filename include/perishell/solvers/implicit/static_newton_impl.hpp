@@ -166,21 +166,22 @@ IncrementReport StaticNewtonSolver<ExecutionSpaceT>::advanceTo(double loadFactor
 }
 
 template <class ExecutionSpaceT>
-void StaticNewtonSolver<ExecutionSpaceT>::saveTo(io::Checkpoint& checkpoint) const {
-  putView(checkpoint, "implicit.displacements", state_.displacements);
-  putView(checkpoint, "implicit.rotations", state_.rotations);
+void StaticNewtonSolver<ExecutionSpaceT>::saveTo(io::Checkpoint& checkpoint, const parallel::NodeGather& gather) const {
+  parallel::putNodalView(checkpoint, "implicit.displacements", state_.displacements, gather);
+  parallel::putNodalView(checkpoint, "implicit.rotations", state_.rotations, gather);
   checkpoint.putReals("implicit.factors", {loadFactor_, prescribedFactor_, preferredStep_, arcLength_, maxArcLength_});
   checkpoint.putIntegers("implicit.flags", {static_cast<long long>(active_), factor_ && factorCurrent_ ? 1 : 0,
                                             indefiniteNoted_ ? 1 : 0, hasArcDirection_ ? 1 : 0});
-  if (hasArcDirection_) putView(checkpoint, "implicit.arc-direction", lastArcDirection_);
+  if (hasArcDirection_) parallel::putNodalView(checkpoint, "implicit.arc-direction", lastArcDirection_, gather);
 }
 
 template <class ExecutionSpaceT>
-void StaticNewtonSolver<ExecutionSpaceT>::restoreFrom(const io::Checkpoint& checkpoint) {
+void StaticNewtonSolver<ExecutionSpaceT>::restoreFrom(const io::Checkpoint& checkpoint,
+                                                    const parallel::NodeGather& gather) {
   const std::string mismatch =
       "the deck's model is not the one the checkpoint's run solved (another mesh, zones or horizon)";
-  takeView(checkpoint, "implicit.displacements", state_.displacements, mismatch);
-  takeView(checkpoint, "implicit.rotations", state_.rotations, mismatch);
+  parallel::takeNodalView(checkpoint, "implicit.displacements", state_.displacements, gather, mismatch);
+  parallel::takeNodalView(checkpoint, "implicit.rotations", state_.rotations, gather, mismatch);
   ++stateVersion_;
   const auto& factors = checkpoint.reals("implicit.factors");
   const auto& flags = checkpoint.integers("implicit.flags");
@@ -199,7 +200,7 @@ void StaticNewtonSolver<ExecutionSpaceT>::restoreFrom(const io::Checkpoint& chec
   hasArcDirection_ = flags[3] != 0;
   if (hasArcDirection_) {
     makeArcLengthVectors();
-    takeView(checkpoint, "implicit.arc-direction", lastArcDirection_, mismatch);
+    parallel::takeNodalView(checkpoint, "implicit.arc-direction", lastArcDirection_, gather, mismatch);
   }
   if (flags[1] != 0 && usesFactor()) {
     IncrementReport scratch;
