@@ -12,8 +12,12 @@
 #include <perishell/shell/shell_body.hpp>
 #include <shell/element_states.hpp>
 
+#include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <iostream>
 #include <string>
+#include <vector>
 
 namespace one_point_shell_test {
 
@@ -403,6 +407,63 @@ TEST(TEST_CATEGORY, one_point_body_forces_are_the_elements_with_and_without_tria
       EXPECT_GT(largest, 1e-6 * forceScale);
     }
   }
+}
+
+TEST(TEST_CATEGORY, selected_elements_give_a_fully_selected_node_the_same_forces_bit_for_bit) {
+  // A distributed step evaluates only the elements with a node whose force is read
+  // (solvers/explicit/central_difference.hpp, ownedWorkOf); shell::selectElements keeps the
+  // gather assembly and each node's element order, so a node all of whose elements are
+  // selected gets the whole body's forces to the bit. A 3 x 3 quad plate, moved and turned;
+  // the mask is interior node 5, whose four elements are selected out of nine.
+  using MemorySpace = TEST_EXECSPACE::memory_space;
+  perishell::mesh::HostQuadMesh plate;
+  plate.coordinates = perishell::CoordinateView<Kokkos::HostSpace>("nodes", 16);
+  for (int node = 0; node < 16; ++node) {
+    plate.coordinates(node, 0) = 0.01 * (node % 4) + 0.0007 * (node % 3);
+    plate.coordinates(node, 1) = 0.01 * (node / 4) - 0.0005 * (node % 2);
+  }
+  plate.quads = perishell::QuadConnectivityView<Kokkos::HostSpace>("elements", 9);
+  std::vector<perishell::LocalIndex> elements;
+  for (int e = 0; e < 9; ++e) {
+    const int first = 4 * (e / 3) + e % 3;
+    const perishell::LocalIndex corners[4] = {first, first + 1, first + 5, first + 4};
+    for (int a = 0; a < 4; ++a) plate.quads(e, a) = corners[a];
+    elements.push_back(e);
+  }
+  perishell::pd::PdKinematics<Kokkos::HostSpace> hostState(16);
+  for (int node = 0; node < 16; ++node) {
+    const double turn[3] = {0.01 * node - 0.07, 0.04 - 0.005 * node, 0.02 * (node % 3)};
+    double q[4];
+    perishell::rotation::exponential(turn, q);
+    for (int k = 0; k < 4; ++k) hostState.rotations(node, k) = q[k];
+    for (int k = 0; k < 3; ++k) hostState.displacements(node, k) = 2e-4 * std::sin(0.5 + 1.3 * node + 2.0 * k);
+  }
+  perishell::pd::PdKinematics<MemorySpace> state(16);
+  Kokkos::deep_copy(state.displacements, hostState.displacements);
+  Kokkos::deep_copy(state.rotations, hostState.rotations);
+  auto body = shell::makeShellBody(TEST_EXECSPACE{}, plate, elements, thickSection(),
+                                   Kokkos::View<double* [4], Kokkos::LayoutRight, MemorySpace>("scale", 9),
+                                   shell::ShellElementKind::OnePoint);
+  Kokkos::deep_copy(body.membraneBendingScale, 1.0);
+  body.assembly = shell::ElementForceAssembly::Gather;
+  Kokkos::View<std::uint8_t*, Kokkos::HostSpace> hostMask("mask", 16);
+  hostMask(5) = 1;
+  const Kokkos::View<const std::uint8_t*, MemorySpace> mask = Kokkos::create_mirror_view_and_copy(MemorySpace{}, hostMask);
+  const auto selected = shell::selectElements(TEST_EXECSPACE{}, body, mask);
+  EXPECT_EQ(selected.numElements(), 4);
+  EXPECT_EQ(selected.assembly, shell::ElementForceAssembly::Gather);
+  perishell::pd::NodalVectorView<MemorySpace> whole("whole", 16), part("part", 16);
+  shell::subtractShellForces(TEST_EXECSPACE{}, body, state, whole);
+  shell::subtractShellForces(TEST_EXECSPACE{}, selected, state, part);
+  const auto a = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, whole);
+  const auto b = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, part);
+  double largest = 0.0;
+  for (int d = 0; d < 6; ++d) {
+    EXPECT_EQ(std::memcmp(&a(5, d), &b(5, d), sizeof(double)), 0) << "dof " << d << ": " << a(5, d) << " " << b(5, d);
+    largest = std::max(largest, std::abs(a(5, d)));
+    EXPECT_EQ(b(15, d), 0.0);  // the far corner's element is not selected
+  }
+  EXPECT_GT(largest, 1e-3);
 }
 
 TEST(TEST_CATEGORY, quaternion_of_a_matrix_and_its_logarithm_invert_the_exponential) {

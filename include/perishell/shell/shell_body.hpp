@@ -62,10 +62,13 @@ struct ShellBody {
   LocalIndex numElements() const { return static_cast<LocalIndex>(quads.extent(0)); }
 };
 
-// The elements of `body` with a node where nodeMask != 0, as a body of their own that
-// scatters its forces (no node incidence): the critical step's local estimate evaluates only
-// the elements around a change (solvers/explicit/central_difference.hpp). Every per-element
-// view of ShellBody is gathered here; a new one must be too.
+// The elements of `body` with a node where nodeMask != 0, as a body of their own, in their
+// order in `body` and with its force assembly: a Gather body gets the subset's node incidence,
+// so that a node all of whose elements are selected sums them in the same order, to the same
+// bits. Uses: the critical step's local estimate over the elements around a change, and a
+// distributed step over the elements whose forces an owned node reads
+// (solvers/explicit/central_difference.hpp). Every per-element view of ShellBody is gathered
+// here; a new one must be too.
 template <class ExecutionSpaceT, class MemorySpaceT>
 ShellBody<MemorySpaceT> selectElements(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
                                        const Kokkos::View<const std::uint8_t*, MemorySpaceT>& nodeMask) {
@@ -88,7 +91,7 @@ ShellBody<MemorySpaceT> selectElements(const ExecutionSpaceT& space, const Shell
   subset.kind = body.kind;
   subset.section = body.section;
   subset.referencePositions = body.referencePositions;
-  subset.assembly = ElementForceAssembly::Scatter;
+  subset.assembly = body.assembly;
   subset.hasTriangles = body.hasTriangles;
   subset.quads = QuadConnectivityView<MemorySpaceT>("selected quads", count);
   subset.membraneBendingScale =
@@ -112,6 +115,14 @@ ShellBody<MemorySpaceT> selectElements(const ExecutionSpaceT& space, const Shell
             for (int c = 0; c < 24; ++c) to.localStiffness(k, r, c) = body.localStiffness(e, r, c);
         if (withEdges) to.quadraticEdges(k) = body.quadraticEdges(e);
       });
+  if (body.nodeElementOffsets.extent(0) > 0) {
+    const auto incidence =
+        mesh::makeNodeIncidence(space, subset.quads, static_cast<LocalIndex>(body.nodeElementOffsets.extent(0) - 1));
+    subset.nodeElementOffsets = incidence.offsets;
+    subset.nodeElementEntries = incidence.entries;
+  }
+  if (body.elementForces.extent(0) > 0)
+    subset.elementForces = decltype(subset.elementForces)("selected shell element forces", count);
   return subset;
 }
 

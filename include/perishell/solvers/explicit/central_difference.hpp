@@ -129,6 +129,7 @@ class CentralDifferenceSolver {
         dampingWork_("pd damping work", body_.numNodes()),
         kineticEnergy_("pd kinetic energy", body_.numNodes()) {
     validate();
+    ownedWork_ = ownedWorkOf(body_, shell_);
     inertia_ = computeNodalInertia(space_, body_, shell_, options_.density, options_.thickness);
     assembly::weighInertiaByShare(space_, actions_.mirrorImages, inertia_.mass, inertia_.rotaryInertia);
     applyInitialSupportValues();
@@ -222,6 +223,7 @@ class CentralDifferenceSolver {
     discardedFracture_ = VectorView<MemorySpace>();
     discardedFlags_ = pd::BondFlagView<MemorySpace>();
     validate();
+    ownedWork_ = ownedWorkOf(body_, shell_);
     inertia_ = computeNodalInertia(space_, body_, shell_, options_.density, options_.thickness);
     assembly::weighInertiaByShare(space_, actions_.mirrorImages, inertia_.mass, inertia_.rotaryInertia);
     criticalTimeStep_ = std::min(criticalTimeStep_, estimateCriticalTimeStep(80, withNeighbours(changedNodes)));
@@ -440,7 +442,8 @@ class CentralDifferenceSolver {
   // their strain energy into outputs.strainEnergy unless it is empty, and then the
   // elements' hourglass energy into hourglassEnergy_.
   void addInternalForces(const pd::PdKinematics<MemorySpace>& state, const pd::BondForceOutputs<MemorySpace>& outputs) {
-    addInternalForces(body_, shell_, options_.forceKernel, state, outputs);
+    addInternalForces(ownedWork_.body ? *ownedWork_.body : body_, ownedWork_.shell ? ownedWork_.shell : shell_,
+                      options_.forceKernel, state, outputs);
   }
 
   // The same over given bodies (the local critical-step estimate's patch of this model's).
@@ -885,6 +888,50 @@ class CentralDifferenceSolver {
       throw std::logic_error(std::string("explicit solver: ") + what + " is not supported in a distributed run");
   }
 
+  // On many ranks, what a step evaluates: only what an owned node reads, since the exchange
+  // overwrites the halo's state (docs/parallel.md, "Owned rows only"). Read are the owned
+  // nodes' forces and those of mirror images whose master is owned (condensed onto it). So:
+  // - the shell elements with a read node (shell::selectElements keeps the gather order);
+  // - with node-gather, the bond rows of the read nodes and of the lower node of each of their
+  //   bonds: that row alone writes the bond's broken flag (pd/bond_forces.hpp). Bond-scatter
+  //   visits every bond anyway.
+  // Empty members on one rank: the step evaluates the whole bodies.
+  struct OwnedWork {
+    std::optional<pd::PdBody<MemorySpace>> body;
+    std::optional<shell::ShellBody<MemorySpace>> shell;
+  };
+  OwnedWork ownedWorkOf(const pd::PdBody<MemorySpace>& body,
+                        const std::optional<shell::ShellBody<MemorySpace>>& shell) const {
+    if (!distribution_.distributed()) return {};
+    const auto owned = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, distribution_.owned());
+    const auto images = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.mirrorImages.nodes);
+    const auto masters = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.mirrorImages.masters);
+    const LocalIndex numNodes = body.numNodes();
+    Kokkos::View<std::uint8_t*, Kokkos::HostSpace> read("nodes whose forces a step reads", numNodes);
+    for (LocalIndex node = 0; node < numNodes; ++node) read(node) = owned(node);
+    for (std::size_t k = 0; k < images.extent(0); ++k)
+      if (owned(masters(k))) read(images(k)) = 1;
+    OwnedWork work;
+    if (shell) {
+      const Kokkos::View<const std::uint8_t*, MemorySpace> readMask = Kokkos::create_mirror_view_and_copy(MemorySpace{}, read);
+      work.shell = shell::selectElements(space_, *shell, readMask);
+    }
+    if (options_.forceKernel != deck::ForceKernel::NodeGather) return work;
+    const auto offsets = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.bonds.offsets);
+    const auto neighbours = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.bonds.neighbours);
+    Kokkos::View<std::uint8_t*, Kokkos::HostSpace> evaluated("bond rows a step evaluates", numNodes);
+    for (LocalIndex node = 0; node < numNodes; ++node) {
+      if (!read(node)) continue;
+      evaluated(node) = 1;
+      for (RowOffset entry = offsets(node); entry < offsets(node + 1); ++entry)
+        if (neighbours(entry) < node) evaluated(neighbours(entry)) = 1;
+    }
+    const Kokkos::View<const std::uint8_t*, MemorySpace> rows = Kokkos::create_mirror_view_and_copy(MemorySpace{}, evaluated);
+    work.body = body;
+    work.body->bonds = pd::restrictRows(space_, body.bonds, rows);
+    return work;
+  }
+
   // With timePhases: fences, adds the time since `start` to `total` and restarts `start`.
   void timePhase(double& total, std::chrono::steady_clock::time_point& start) const {
     if (!options_.timePhases) return;
@@ -895,6 +942,7 @@ class CentralDifferenceSolver {
   ExecutionSpaceT space_;
   parallel::NodeDistribution<MemorySpace> distribution_;
   pd::PdBody<MemorySpace> body_;
+  OwnedWork ownedWork_;  // ownedWorkOf(body_, shell_)
   std::optional<shell::ShellBody<MemorySpace>> shell_;
   ExternalActions<MemorySpace> actions_;
   ExplicitOptions options_;
