@@ -453,11 +453,13 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   const auto writeCheckpoint = [&] {
     io::Checkpoint state;
     solver.saveTo(state, gather);
-    if (!communicator.root()) return;
-    output.saveTo(state);
-    if (adaptive) putView(state, "adaptive.element-is-pd", adaptive->elementIsPd());
-    state.putInteger("explicit-run.zone-switches", switches);
-    writeRunCheckpoint(state, model, "explicit", directory);
+    if (communicator.root()) {
+      output.saveTo(state);
+      if (adaptive) putView(state, "adaptive.element-is-pd", adaptive->elementIsPd());
+      state.putInteger("explicit-run.zone-switches", switches);
+      writeRunCheckpoint(state, model, "explicit", directory);
+    }
+    // Every rank restarts its clock: the next checkpoint by the clock is due on all alike.
     checkpointSchedule.written();
     ++checkpointsWritten;
   };

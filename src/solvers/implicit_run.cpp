@@ -299,14 +299,16 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
   const auto writeCheckpoint = [&](int increment) {
     io::Checkpoint state;
     solver.saveTo(state, gather);
-    if (!communicator.root()) return;
-    putOutputPosition(state, output.position());
-    state.putIntegers("implicit-run.counters",
-                      {increment, summary.newtonIterations, summary.linearIterations, summary.cuts,
-                       summary.factorizations, summary.lineSearches, summary.preconditionerBuilds,
-                       summary.negativePivots, limitPointReported, snapReported, roundOffReported});
-    state.putReal("implicit-run.max-displacement", summary.maxDisplacement);
-    writeRunCheckpoint(state, model, "implicit", directory);
+    if (communicator.root()) {
+      putOutputPosition(state, output.position());
+      state.putIntegers("implicit-run.counters",
+                        {increment, summary.newtonIterations, summary.linearIterations, summary.cuts,
+                         summary.factorizations, summary.lineSearches, summary.preconditionerBuilds,
+                         summary.negativePivots, limitPointReported, snapReported, roundOffReported});
+      state.putReal("implicit-run.max-displacement", summary.maxDisplacement);
+      writeRunCheckpoint(state, model, "implicit", directory);
+    }
+    // Every rank restarts its clock: the next checkpoint by the clock is due on all alike.
     checkpointSchedule.written();
     ++checkpointsWritten;
   };

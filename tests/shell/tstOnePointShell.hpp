@@ -448,7 +448,8 @@ TEST(TEST_CATEGORY, selected_elements_give_a_fully_selected_node_the_same_forces
   body.assembly = shell::ElementForceAssembly::Gather;
   Kokkos::View<std::uint8_t*, Kokkos::HostSpace> hostMask("mask", 16);
   hostMask(5) = 1;
-  const Kokkos::View<const std::uint8_t*, MemorySpace> mask = Kokkos::create_mirror_view_and_copy(MemorySpace{}, hostMask);
+  const Kokkos::View<const std::uint8_t*, MemorySpace> mask =
+      Kokkos::create_mirror_view_and_copy(MemorySpace{}, hostMask);
   const auto selected = shell::selectElements(TEST_EXECSPACE{}, body, mask);
   EXPECT_EQ(selected.numElements(), 4);
   EXPECT_EQ(selected.assembly, shell::ElementForceAssembly::Gather);

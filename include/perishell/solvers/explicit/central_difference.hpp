@@ -358,14 +358,16 @@ class CentralDifferenceSolver {
     long long found = 0;
     for (std::size_t b = 0; b < intact.extent(0); ++b) {
       const long long i = gather.meshNode(halfBonds(b, 0)), j = gather.meshNode(halfBonds(b, 1));
-      const bool isBroken = std::binary_search(broken.begin(), broken.end(), std::make_pair(std::min(i, j), std::max(i, j)));
+      const bool isBroken =
+          std::binary_search(broken.begin(), broken.end(), std::make_pair(std::min(i, j), std::max(i, j)));
       intact(b) = isBroken ? 0 : 1;
       if (isBroken && (owned.extent(0) == 0 || owned(halfBonds(b, 0)))) ++found;
     }
     found = distribution_.communicator().sum(found);
     if (found != static_cast<long long>(broken.size()))
-      throw io::CheckpointError(checkpoint.context() + "'explicit.broken-bonds' lists " + std::to_string(broken.size()) +
-                                " broken bonds, of which this model has " + std::to_string(found) + ": " + mismatch);
+      throw io::CheckpointError(checkpoint.context() + "'explicit.broken-bonds' lists " +
+                                std::to_string(broken.size()) + " broken bonds, of which this model has " +
+                                std::to_string(found) + ": " + mismatch);
     Kokkos::deep_copy(intact_, intact);
     Kokkos::deep_copy(space_, intactNext_, intact_);
   }
@@ -913,7 +915,8 @@ class CentralDifferenceSolver {
       if (owned(masters(k))) read(images(k)) = 1;
     OwnedWork work;
     if (shell) {
-      const Kokkos::View<const std::uint8_t*, MemorySpace> readMask = Kokkos::create_mirror_view_and_copy(MemorySpace{}, read);
+      const Kokkos::View<const std::uint8_t*, MemorySpace> readMask =
+          Kokkos::create_mirror_view_and_copy(MemorySpace{}, read);
       work.shell = shell::selectElements(space_, *shell, readMask);
     }
     if (options_.forceKernel != deck::ForceKernel::NodeGather) return work;
@@ -926,7 +929,8 @@ class CentralDifferenceSolver {
       for (RowOffset entry = offsets(node); entry < offsets(node + 1); ++entry)
         if (neighbours(entry) < node) evaluated(neighbours(entry)) = 1;
     }
-    const Kokkos::View<const std::uint8_t*, MemorySpace> rows = Kokkos::create_mirror_view_and_copy(MemorySpace{}, evaluated);
+    const Kokkos::View<const std::uint8_t*, MemorySpace> rows =
+        Kokkos::create_mirror_view_and_copy(MemorySpace{}, evaluated);
     work.body = body;
     work.body->bonds = pd::restrictRows(space_, body.bonds, rows);
     return work;
