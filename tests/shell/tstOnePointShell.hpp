@@ -13,6 +13,7 @@
 #include <shell/element_states.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <iostream>
@@ -340,6 +341,29 @@ TEST(TEST_CATEGORY, explicit_triangle_force_is_the_mitc3_triangles) {
   for (int i = 0; i < 18; ++i) EXPECT_LE(std::abs(rigid[i]), 1e-10 * forceScale) << i;
 }
 
+// A body's nodes turned by the rotation vector turn(node) and moved by move(node, k), on the
+// host, and the same state on the test's memory space.
+template <class TurnT, class MoveT>
+perishell::pd::PdKinematics<Kokkos::HostSpace> turnedAndMovedNodes(int numNodes, TurnT turn, MoveT move) {
+  perishell::pd::PdKinematics<Kokkos::HostSpace> state(numNodes);
+  for (int node = 0; node < numNodes; ++node) {
+    const std::array<double, 3> theta = turn(node);
+    double q[4];
+    perishell::rotation::exponential(theta.data(), q);
+    for (int k = 0; k < 4; ++k) state.rotations(node, k) = q[k];
+    for (int k = 0; k < 3; ++k) state.displacements(node, k) = move(node, k);
+  }
+  return state;
+}
+
+template <class MemorySpaceT>
+perishell::pd::PdKinematics<MemorySpaceT> copiedTo(const perishell::pd::PdKinematics<Kokkos::HostSpace>& host) {
+  perishell::pd::PdKinematics<MemorySpaceT> state(static_cast<perishell::LocalIndex>(host.displacements.extent(0)));
+  Kokkos::deep_copy(state.displacements, host.displacements);
+  Kokkos::deep_copy(state.rotations, host.rotations);
+  return state;
+}
+
 TEST(TEST_CATEGORY, one_point_body_forces_are_the_elements_with_and_without_triangles) {
   // subtractShellForces runs a kernel specialised for bodies of quads only, and one that takes
   // each element's triangle or quad branch: both give the sum of the element forces evaluated
@@ -355,17 +379,10 @@ TEST(TEST_CATEGORY, one_point_body_forces_are_the_elements_with_and_without_tria
   const perishell::LocalIndex corners[3][4] = {{0, 1, 4, 3}, {1, 2, 5, 5}, {1, 5, 4, 4}};
   for (int e = 0; e < 3; ++e)
     for (int a = 0; a < 4; ++a) plate.quads(e, a) = corners[e][a];
-  perishell::pd::PdKinematics<Kokkos::HostSpace> hostState(6);
-  for (int node = 0; node < 6; ++node) {
-    const double turn[3] = {0.02 * node - 0.05, 0.03 - 0.01 * node, 0.015 * (node % 2)};
-    double q[4];
-    perishell::rotation::exponential(turn, q);
-    for (int k = 0; k < 4; ++k) hostState.rotations(node, k) = q[k];
-    for (int k = 0; k < 3; ++k) hostState.displacements(node, k) = 1e-4 * std::sin(1.0 + node + 2.0 * k);
-  }
-  perishell::pd::PdKinematics<MemorySpace> state(6);
-  Kokkos::deep_copy(state.displacements, hostState.displacements);
-  Kokkos::deep_copy(state.rotations, hostState.rotations);
+  const auto hostState = turnedAndMovedNodes(
+      6, [](int node) { return std::array<double, 3>{0.02 * node - 0.05, 0.03 - 0.01 * node, 0.015 * (node % 2)}; },
+      [](int node, int k) { return 1e-4 * std::sin(1.0 + node + 2.0 * k); });
+  const auto state = copiedTo<MemorySpace>(hostState);
   const shell::ShellSection section = thickSection();
   const double forceScale = section.youngModulus * section.thickness;
   for (const std::vector<perishell::LocalIndex>& elements : {std::vector<perishell::LocalIndex>{0}, std::vector<perishell::LocalIndex>{0, 1, 2}}) {
@@ -430,17 +447,9 @@ TEST(TEST_CATEGORY, selected_elements_give_a_fully_selected_node_the_same_forces
     for (int a = 0; a < 4; ++a) plate.quads(e, a) = corners[a];
     elements.push_back(e);
   }
-  perishell::pd::PdKinematics<Kokkos::HostSpace> hostState(16);
-  for (int node = 0; node < 16; ++node) {
-    const double turn[3] = {0.01 * node - 0.07, 0.04 - 0.005 * node, 0.02 * (node % 3)};
-    double q[4];
-    perishell::rotation::exponential(turn, q);
-    for (int k = 0; k < 4; ++k) hostState.rotations(node, k) = q[k];
-    for (int k = 0; k < 3; ++k) hostState.displacements(node, k) = 2e-4 * std::sin(0.5 + 1.3 * node + 2.0 * k);
-  }
-  perishell::pd::PdKinematics<MemorySpace> state(16);
-  Kokkos::deep_copy(state.displacements, hostState.displacements);
-  Kokkos::deep_copy(state.rotations, hostState.rotations);
+  const auto state = copiedTo<MemorySpace>(turnedAndMovedNodes(
+      16, [](int node) { return std::array<double, 3>{0.01 * node - 0.07, 0.04 - 0.005 * node, 0.02 * (node % 3)}; },
+      [](int node, int k) { return 2e-4 * std::sin(0.5 + 1.3 * node + 2.0 * k); }));
   auto body = shell::makeShellBody(TEST_EXECSPACE{}, plate, elements, thickSection(),
                                    Kokkos::View<double* [4], Kokkos::LayoutRight, MemorySpace>("scale", 9),
                                    shell::ShellElementKind::OnePoint);

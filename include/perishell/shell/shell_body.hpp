@@ -63,9 +63,9 @@ struct ShellBody {
 };
 
 // The elements of `body` with a node where nodeMask != 0, as a body of their own, in their
-// order in `body` and with its force assembly: a Gather body gets the subset's node incidence,
-// so that a node all of whose elements are selected sums them in the same order, to the same
-// bits. Uses: the critical step's local estimate over the elements around a change, and a
+// order in `body`, with its force assembly and a node incidence of its own (as makeShellBody
+// gives every body): a node all of whose elements are selected sums them in the same order,
+// to the same bits. Uses: the critical step's local estimate over the elements around a change, and a
 // distributed step over the elements whose forces an owned node reads
 // (solvers/explicit/central_difference.hpp). Every per-element view of ShellBody is gathered
 // here; a new one must be too.
