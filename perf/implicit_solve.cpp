@@ -12,8 +12,9 @@
 // (model.md §7), printed beside the true number of free DOF.
 //
 // Usage: perishell_perf_implicit_solve [--csv] [--repeats R] [--preconditioner NAME]
-//                                      [--factorization auto|host|device]
-//                                      [--models ccm,pd] [--newton N] [spacing_mm...]
+//                                      [--factorization auto|host|device] [--amg-drop-tolerance T]
+//                                      [--models ccm,pd,pd50] [--newton N] [spacing_mm...]
+//   models: ccm, pd (100 %) or pdNN (NN % PD, the zone grown from the clamped edge's middle);
 //   defaults: 5 repeats, preconditioner amg, models ccm and pd, spacings 0.5 0.25 0.1 mm; with
 //   cholesky or direct the increment ends with a factorization of its converged tangent (the
 //   stability check, counted in setup per solve)
@@ -38,15 +39,25 @@ struct Options {
   int repeats = 5;
   std::string preconditioner = "amg";
   std::string factorization = "auto";  // solver.factorization: where a GPU run factors
+  std::string amgDropTolerance = "0.05";  // solver.amg-drop-tolerance
   std::vector<std::string> models{"ccm", "pd"};
   std::vector<double> spacingsMm{0.5, 0.25, 0.1};
   int newtonIterations = 0;  // 0: the whole first increment
 };
 
+// "pd25" -> 25: a mixed model of that PD ratio; -1 for any other name.
+int pdRatioPercent(const std::string& model) {
+  if (model.size() < 3 || model.compare(0, 2, "pd") != 0) return -1;
+  char* end = nullptr;
+  const long percent = std::strtol(model.c_str() + 2, &end, 10);
+  return *end == '\0' && percent > 0 && percent < 100 ? static_cast<int>(percent) : -1;
+}
+
 [[noreturn]] void usage(const char* program, const std::string& problem) {
   std::fprintf(stderr,
                "error: %s\nusage: %s [--csv] [--repeats R] [--preconditioner jacobi|block-jacobi|amg|cholesky|direct|auto] "
-               "[--factorization auto|host|device] [--models ccm,pd] [--newton N] [spacing_mm...]\n",
+               "[--factorization auto|host|device] [--amg-drop-tolerance T] [--models ccm,pd,pd50] [--newton N] "
+               "[spacing_mm...]\n",
                problem.c_str(), program);
   std::exit(2);
 }
@@ -68,13 +79,16 @@ Options parseArguments(int argc, char* argv[]) {
       options.preconditioner = argv[++a];
     } else if (argument == "--factorization" && hasValue) {
       options.factorization = argv[++a];
+    } else if (argument == "--amg-drop-tolerance" && hasValue) {
+      options.amgDropTolerance = argv[++a];
     } else if (argument == "--models" && hasValue) {
       options.models.clear();
       std::string list = argv[++a];
       for (std::size_t start = 0; start <= list.size();) {
         const auto comma = std::min(list.find(',', start), list.size());
         const std::string model = list.substr(start, comma - start);
-        if (model != "ccm" && model != "pd") usage(argv[0], "unknown model '" + model + "' (ccm or pd)");
+        if (model != "ccm" && model != "pd" && pdRatioPercent(model) < 0)
+          usage(argv[0], "unknown model '" + model + "' (ccm, pd or pdNN: NN % PD)");
         options.models.push_back(model);
         start = comma + 1;
       }
@@ -89,20 +103,27 @@ Options parseArguments(int argc, char* argv[]) {
   return options;
 }
 
-// The deck of example 4.2.1 with the whole plate CCM or PD (model.md §7).
-perishell::model::Model pressedPlate(double spacing, const std::string& zone, const std::string& preconditioner,
-                                     const std::string& factorization, int maxIterations) {
+// The deck of example 4.2.1 with the whole plate CCM or PD, or a PD zone of the given ratio grown
+// from the middle of the clamped edge as in apps/cases/pressed_plate_4_2_1.yaml (model.md §7).
+perishell::model::Model pressedPlate(double spacing, const std::string& zone, const Options& options,
+                                     int maxIterations) {
+  const int percent = pdRatioPercent(zone);
+  const std::string zones = percent < 0 ? "{default: " + zone + "}"
+                                        : "{default: ccm, pd-ratio: {target: " + std::to_string(percent / 100.0) +
+                                              ", around: {clamped-edge-middle: [0.0, 0.015, 0.0]}}}";
   const std::string text = R"(perishell:
   version: 1
   mesh: {generator: plate, length-x: 0.090, length-y: 0.030, spacing: )" +
                            std::to_string(spacing) + R"(}
   material: {young-modulus: 210.0e9, poisson-ratio: 0.33, density: 2440.0, thickness: 0.8e-3}
-  zones: {default: )" + zone + R"(}
+  zones: )" + zones + R"(
   supports: {clamp: {set: left, dofs: [ux, uy, uz, rx, ry, rz]}}
   loads: {pressure: {type: pressure, value: 1.0e6}}
   solver: {type: implicit, increments: 100, max-iterations: )" +
-                           std::to_string(maxIterations) + R"(, tolerance: 1.0e-8, preconditioner: )" + preconditioner +
-                           ", factorization: " + factorization + R"(}
+                           std::to_string(maxIterations) + R"(, tolerance: 1.0e-8, preconditioner: )" +
+                           options.preconditioner +
+                           ", factorization: " + options.factorization +
+                           ", amg-drop-tolerance: " + options.amgDropTolerance + R"(}
 )";
   return perishell::model::buildModel(perishell::parseDeck(text, "pressed_plate.yaml"));
 }
@@ -126,12 +147,12 @@ int main(int argc, char* argv[]) {
                 "tip_deflection_m,paper_solve_s\n");
   } else {
     std::printf("# implicit pressed plate 4.2.1 on %s (concurrency %d), first increment (1 %% of 1 MPa)%s, "
-                "assembly median of %d\n",
+                "assembly median of %d, %s preconditioner, amg-drop-tolerance %s\n",
                 ExecutionSpace::name(), ExecutionSpace::concurrency(),
                 options.newtonIterations > 0 ? (", its first " + std::to_string(options.newtonIterations) +
                                                 " Newton iterations").c_str()
                                              : "",
-                options.repeats);
+                options.repeats, options.preconditioner.c_str(), options.amgDropTolerance.c_str());
     std::printf("%5s %8s %9s %9s %10s %10s %10s %12s %7s %9s %10s %10s %12s %10s\n", "model", "dx[mm]", "nodes",
                 "elements", "paper DOF", "free DOF", "bonds", "assembly[s]", "Newton", "PCG/solve", "setup[s]",
                 "solve[s]", "tip w [m]", "paper [s]");
@@ -139,7 +160,7 @@ int main(int argc, char* argv[]) {
   for (const auto& zone : options.models)
     for (const double spacingMm : options.spacingsMm) {
       const int maxIterations = options.newtonIterations > 0 ? options.newtonIterations : 100;
-      const auto model = pressedPlate(spacingMm * 1e-3, zone, options.preconditioner, options.factorization, maxIterations);
+      const auto model = pressedPlate(spacingMm * 1e-3, zone, options, maxIterations);
       auto solver = perishell::solvers::makeStaticSolver(ExecutionSpace{}, model);
       const double assemblySeconds = perishell::perf::medianSeconds(options.repeats, [&] { solver.assembleTangent(); });
       perishell::solvers::IncrementReport report;

@@ -703,8 +703,8 @@ deck::Solver readSolver(const Section& section) {
                                               "damping", "shell-element", "hourglass"};
   const std::vector<std::string> implicitKeys{"type", "increments", "max-iterations", "tolerance",
                                               "preconditioner", "max-cuts", "tangent", "amg-reuse",
-                                              "line-search", "control", "max-increments", "newton",
-                                              "factorization"};
+                                              "amg-drop-tolerance", "line-search", "control", "max-increments",
+                                              "newton", "factorization"};
   std::vector<std::string> allKeys = explicitKeys;
   allKeys.insert(allKeys.end(), implicitKeys.begin() + 1, implicitKeys.end());
   section.allowOnly(allKeys);
@@ -793,6 +793,10 @@ deck::Solver readSolver(const Section& section) {
     if (!(settings.amgReuse == 0.0 || (settings.amgReuse >= 1.0 && settings.amgReuse <= 100.0)))
       section.fail("amg-reuse", "must be 0 (rebuild the multigrid hierarchy at every Newton iteration) or a growth "
                                 "factor in [1, 100], got " + formatNumber(settings.amgReuse));
+    settings.amgDropTolerance = section.number("amg-drop-tolerance", settings.amgDropTolerance);
+    if (!(settings.amgDropTolerance >= 0.0 && settings.amgDropTolerance < 1.0))
+      section.fail("amg-drop-tolerance", "must be in [0, 1) (0 aggregates over every coupling), got " +
+                                             formatNumber(settings.amgDropTolerance));
   }
   return solver;
 }

@@ -281,6 +281,7 @@ perishell:
     preconditioner: jacobi
     tangent: exact
     amg-reuse: 2.0
+    amg-drop-tolerance: 0.1
     newton: displacement
     factorization: host
   output:
@@ -358,6 +359,7 @@ perishell:
   EXPECT_EQ(deck.solver.implicitSettings.preconditioner, deck::Preconditioner::Jacobi);
   EXPECT_EQ(deck.solver.implicitSettings.tangent, deck::Tangent::Exact);
   EXPECT_DOUBLE_EQ(deck.solver.implicitSettings.amgReuse, 2.0);
+  EXPECT_DOUBLE_EQ(deck.solver.implicitSettings.amgDropTolerance, 0.1);
   EXPECT_EQ(deck.solver.implicitSettings.newton, deck::ImplicitSettings::Newton::Displacement);
   EXPECT_EQ(deck.solver.implicitSettings.factorization, deck::Factorization::Host);
 
@@ -415,6 +417,7 @@ TEST(TEST_CATEGORY, deck_defaults_fill_what_a_minimal_deck_leaves_out) {
   EXPECT_EQ(implicitSettings.preconditioner, deck::Preconditioner::Auto);
   EXPECT_EQ(implicitSettings.tangent, deck::Tangent::Auto);
   EXPECT_DOUBLE_EQ(implicitSettings.amgReuse, 1.5);
+  EXPECT_DOUBLE_EQ(implicitSettings.amgDropTolerance, 0.05);
   EXPECT_EQ(implicitSettings.newton, deck::ImplicitSettings::Newton::Mixed);
   EXPECT_TRUE(implicitDeck.warnings.empty());
 }
@@ -606,6 +609,8 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
        "solver.factorization", {"'gpu' is not one of auto, host, device"}},
       {"amg reuse below 1", {{"    increments: 10\n", "    increments: 10\n    amg-reuse: 0.5\n"}}, "solver.amg-reuse",
        {"must be 0 (rebuild the multigrid hierarchy at every Newton iteration) or a growth factor in [1, 100], got 0.5"}},
+      {"amg drop tolerance of 1", {{"    increments: 10\n", "    increments: 10\n    amg-drop-tolerance: 1\n"}},
+       "solver.amg-drop-tolerance", {"must be in [0, 1) (0 aggregates over every coupling), got 1"}},
       {"unknown generator", {{"generator: plate", "generator: disc"}}, "mesh.generator",
        {"'disc' is not one of plate, cylinder, hexagonal-prism, gmsh"}},
       {"unsupported version", {{"version: 1", "version: 2"}}, "version", {"unsupported deck version 2"}},

@@ -206,6 +206,9 @@ struct ImplicitSettings {
   // Newton reuses the AMG hierarchy while its Krylov iterations stay within this factor of
   // those right after a rebuild; 0 rebuilds it every iteration (solvers::NewtonOptions).
   double amgReuse = 1.5;
+  // Couplings weaker than this (scaled) are ignored by the AMG aggregation
+  // (multigrid::SmoothedAggregationOptions::dropTolerance).
+  double amgDropTolerance = 0.05;
   bool lineSearch = false;  // solvers::NewtonOptions::lineSearch
   // Mixed: the shell elements' local forces are Newton unknowns of their own
   // (solvers::NewtonOptions::mixedFormat); Displacement: the classical Newton.

@@ -128,6 +128,8 @@ struct NewtonOptions {
   // rebuild (Galerkin products, lambda_max, coarse inverse) costs as much as a few dozen
   // PCG iterations (docs/implicit.md).
   double amgReuseGrowth = 1.5;
+  // multigrid::SmoothedAggregationOptions::dropTolerance (deck solver.amg-drop-tolerance).
+  double amgDropTolerance = multigrid::SmoothedAggregationOptions{}.dropTolerance;
   // Mixed-format Newton (docs/implicit.md): the shell elements' local forces s are carried
   // from iteration to iteration as independent unknowns, s <- K_l (d + B du), and the next
   // tangent's initial-stress term takes them in place of K_l d at the new state. Converged

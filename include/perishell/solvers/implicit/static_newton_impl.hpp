@@ -576,12 +576,14 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveOnce(const Matrix& K, 
     if (!multigrid_ || rebuild) {
       ++report.preconditionerBuilds;
       updateCurrentPositions();
+      multigrid::SmoothedAggregationOptions multigridOptions;
+      multigridOptions.dropTolerance = options_.amgDropTolerance;
       onEveryRank("the multigrid preconditioner", [&] {
         if (multigrid_)
           multigrid_->update(preconditionerMatrix(K), currentPositions_);
         else
           multigrid_ = std::make_shared<multigrid::SmoothedAggregationPreconditioner<ExecutionSpaceT>>(
-              space_, preconditionerMatrix(K), currentPositions_);
+              space_, preconditionerMatrix(K), currentPositions_, multigridOptions);
       });
     } else {
       limited.maxIterations = std::min(linear.maxIterations, reuseIterationLimit());

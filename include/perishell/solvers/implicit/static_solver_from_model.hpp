@@ -38,6 +38,7 @@ inline NewtonOptions newtonOptions(const model::Model& model, bool momentsApplie
   options.mixedFormat = settings.newton == deck::ImplicitSettings::Newton::Mixed;
   options.arcLengthFirstStep = 1.0 / settings.increments;
   options.amgReuseGrowth = settings.amgReuse;
+  options.amgDropTolerance = settings.amgDropTolerance;
   options.preconditioner = settings.preconditioner;
   options.factorization = settings.factorization;
   options.tangent = settings.tangent == deck::Tangent::Exact || (settings.tangent == deck::Tangent::Auto && momentsApplied)

@@ -10,6 +10,7 @@
 #include <perishell/core/types.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -43,6 +44,42 @@ HostNodeGraph nodeGraphOf(const HostRowMap& rowMap, const HostEntries& entries, 
     neighbours.clear();
     for (RowOffset k = rowMap(blockSize * node); k < rowMap(blockSize * (node + 1)); ++k)
       neighbours.push_back(entries(k) / blockSize);
+    std::sort(neighbours.begin(), neighbours.end());
+    neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
+    graph.columns.insert(graph.columns.end(), neighbours.begin(), neighbours.end());
+    graph.rowMap.push_back(graph.columns.size());
+  }
+  return graph;
+}
+
+// The node graph of strong couplings only (Vanek, Mandel and Brezina 1996, "strongly coupled
+// neighbourhood"; MueLu's "aggregation: drop tol", amalgamated per node): nodes i != j are
+// adjacent when some non-zero entry of their block has |a_pq| >= dropTolerance sqrt(|a_pp a_qq|).
+// The scaled entries are unitless, so translations and rotations compare alike; a supported
+// DOF (zero off-diagonals after elimination) couples to nothing. dropTolerance 0 keeps every
+// stored block (nodeGraphOf).
+template <class HostRowMap, class HostEntries, class HostValues>
+HostNodeGraph strongNodeGraphOf(const HostRowMap& rowMap, const HostEntries& entries, const HostValues& values,
+                                int blockSize, double dropTolerance) {
+  if (!(dropTolerance > 0.0)) return nodeGraphOf(rowMap, entries, blockSize);
+  const LocalIndex numRows = static_cast<LocalIndex>(rowMap.extent(0) - 1);
+  std::vector<double> diagonal(numRows, 0.0);
+  for (LocalIndex row = 0; row < numRows; ++row)
+    for (RowOffset k = rowMap(row); k < rowMap(row + 1); ++k)
+      if (entries(k) == row) diagonal[row] = std::abs(values(k));
+  const LocalIndex numNodes = numRows / blockSize;
+  HostNodeGraph graph;
+  graph.rowMap.assign(1, 0);
+  std::vector<LocalIndex> neighbours;
+  for (LocalIndex node = 0; node < numNodes; ++node) {
+    neighbours.assign(1, node);
+    for (LocalIndex row = blockSize * node; row < blockSize * (node + 1); ++row)
+      for (RowOffset k = rowMap(row); k < rowMap(row + 1); ++k) {
+        const LocalIndex column = entries(k);
+        if (column / blockSize != node && values(k) != 0.0 &&
+            std::abs(values(k)) >= dropTolerance * std::sqrt(diagonal[row] * diagonal[column]))
+          neighbours.push_back(column / blockSize);
+      }
     std::sort(neighbours.begin(), neighbours.end());
     neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
     graph.columns.insert(graph.columns.end(), neighbours.begin(), neighbours.end());

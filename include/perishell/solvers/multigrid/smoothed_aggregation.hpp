@@ -6,7 +6,8 @@
 // independent.
 //
 // Per level l (A_0 = the tangent, 6 DOF per node):
-// - nodes are aggregated greedily (aggregation.hpp, host, once per pattern);
+// - nodes are aggregated greedily over their strong couplings (aggregation.hpp, host, once
+//   per pattern, from the values of the first matrix);
 // - the near-null space B_l (6 columns) is, on the finest level, the 6 rigid-body modes of
 //   each node in the current configuration (u = t, theta = 0; u = w x (x - x_c), theta = w),
 //   zero on constrained DOF (rows holding only their diagonal after eliminateDirichlet);
@@ -67,6 +68,13 @@ struct SmoothedAggregationOptions {
   // did that on the tie plate 4.1.1 (tstSmoothedAggregation), 40 are ample and cost about
   // as much as 5 preconditioned CG iterations.
   int powerIterations = 40;
+  // Aggregation follows strong couplings only (aggregation.hpp, strongNodeGraphOf). A PD
+  // node couples to every node of its horizon (~28 at delta = 3 dx), and aggregating whole
+  // horizons coarsened too fast: on the pressed plate 4.2.1 (first increment, 2 OpenMP
+  // threads) 0.05 cut PCG per solve from 120 to 55 (100 % PD) and from 149 to 85 (50 % PD) at
+  // dx 0.5 mm, from 216 to 125 and 301 to 128 at 0.25 mm; CCM-only stayed at 40 and 39
+  // (docs/implicit.md, "Strength of connection"). 0 aggregates over every stored block.
+  double dropTolerance = 0.05;
 };
 
 namespace detail {
@@ -306,10 +314,11 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
       : space_(space), options_(options) {
     checkInput(A, positions);
     if (options.maxCoarseNodes < 1 || options.maxLevels < 1 || options.chebyshevDegree < 1 ||
-        options.powerIterations < 1 || !(options.chebyshevEigenRatio > 1.0))
+        options.powerIterations < 1 || !(options.chebyshevEigenRatio > 1.0) ||
+        !(options.dropTolerance >= 0.0 && options.dropTolerance < 1.0))
       throw std::invalid_argument(std::string(who) +
-                                  ": options need maxCoarseNodes, maxLevels, chebyshevDegree, powerIterations >= 1 "
-                                  "and chebyshevEigenRatio > 1");
+                                  ": options need maxCoarseNodes, maxLevels, chebyshevDegree, powerIterations >= 1, "
+                                  "chebyshevEigenRatio > 1 and 0 <= dropTolerance < 1");
     levels_.emplace_back();
     snapshotFineMatrix(A);
     levels_[0].nearNullSpace = near_null_space_type("perishell::amg::near_null_space_0", A.numRows());
@@ -319,7 +328,9 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
       if (numNodes <= options_.maxCoarseNodes || static_cast<int>(l) + 1 >= options_.maxLevels) break;
       const auto hostRowMap = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), levels_[l].A.graph.row_map);
       const auto hostEntries = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), levels_[l].A.graph.entries);
-      const Aggregates aggregates = aggregateNodes(nodeGraphOf(hostRowMap, hostEntries, dofPerNode));
+      const auto hostValues = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), levels_[l].A.values);
+      const Aggregates aggregates = aggregateNodes(
+          strongNodeGraphOf(hostRowMap, hostEntries, hostValues, dofPerNode, options_.dropTolerance));
       if (aggregates.numAggregates == numNodes) break;  // coarsening stalled
       buildTransfer(l, aggregates);
     }
