@@ -18,10 +18,12 @@
 # LIMIT to time a slow backend in less time: steel - stop after this many steps (the load
 #       ramp is unchanged; default the deck's 50,000); pressed - the grid spacing [m]
 #       (default the deck's 0.5e-3).
+# AMG_DROP_TOLERANCE=T (pressed only) sets the deck's solver.amg-drop-tolerance, for an A/B of
+#       the aggregation (0: every coupling, as before 2026-12-06; default 0.05).
 # Each run's full log is kept next to the CSV (OUT.csv.ratio-R.log).
 set -euo pipefail
 if [[ $# -lt 3 ]]; then
-  sed -n '2,20p' "$0" >&2
+  sed -n '2,22p' "$0" >&2
   exit 2
 fi
 app=$1 case=$2 csv=$3 limit=${4:-}
@@ -51,7 +53,12 @@ deck_for() {
     pressed)
       sed -e "s/^      target: 0.5$/      target: $ratio/" "$base" > "$deck"
       grep -q "target: $ratio\$" "$deck" || { echo "pd_ratio_sweep: $base has no 'target: 0.5' line" >&2; exit 1; }
-      if [[ -n $limit ]]; then sed -i -e "s/^    spacing: 0.5e-3$/    spacing: $limit/" "$deck"; fi ;;
+      if [[ -n $limit ]]; then sed -i -e "s/^    spacing: 0.5e-3$/    spacing: $limit/" "$deck"; fi
+      if [[ -n ${AMG_DROP_TOLERANCE:-} ]]; then
+        sed -i -e "s/^    preconditioner: amg$/    preconditioner: amg\n    amg-drop-tolerance: $AMG_DROP_TOLERANCE/" "$deck"
+        grep -q "amg-drop-tolerance: $AMG_DROP_TOLERANCE\$" "$deck" ||
+          { echo "pd_ratio_sweep: $base has no 'preconditioner: amg' line" >&2; exit 1; }
+      fi ;;
     steel | steel-fine)
       if [[ $ratio == 0 ]]; then
         sed -e "s/^    default: pd$/    default: ccm/" "$base" | awk '/^    pre-cracks:/ {skip = 1; next} skip && /^      / {next} {skip = 0; print}' > "$deck"
