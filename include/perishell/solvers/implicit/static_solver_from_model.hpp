@@ -27,6 +27,9 @@ bool appliesMoments(const ExternalActions<MemorySpaceT>& actions) {
   return false;
 }
 
+static_assert(deck::ImplicitSettings{}.amgDropTolerance == multigrid::SmoothedAggregationOptions{}.dropTolerance,
+              "the deck's default solver.amg-drop-tolerance is the multigrid's default");
+
 // The deck's Newton settings; momentsApplied: whether any load has a moment component (on any rank).
 inline NewtonOptions newtonOptions(const model::Model& model, bool momentsApplied) {
   const auto& settings = model.deck.solver.implicitSettings;
