@@ -5,6 +5,8 @@
 //   atomic_add), median over repeats;
 // - the first load increment (1 % of the pressure, as the deck's 100 increments): Newton
 //   iterations, and per linear solve the preconditioner set-up, the PCG time and iterations;
+//   with amg also the set-up's parts (aggregation and patterns, smoother, prolongator,
+//   Galerkin products, coarse inverse);
 //   with --newton N only its first N Newton iterations (N = 1: one linear solve, the
 //   paper's measure, its AMG set-up built from nothing).
 // The paper's Table 4 timed one linear solve of its 50 % PD model: 163 s (259,200 DOF),
@@ -189,6 +191,12 @@ int main(int argc, char* argv[]) {
                     report.linearIterations / solves, report.seconds.preconditioner / solves,
                     report.seconds.linearSolve / solves, tip,
                     paper > 0.0 ? std::to_string(static_cast<int>(paper)).c_str() : "-");
+        const auto setup = solver.multigridSetupSeconds();
+        if (setup.total() > 0.0)
+          std::printf("#   amg set-up per solve [s]: patterns %.4f, smoother %.4f, prolongator %.4f, galerkin %.4f, "
+                      "coarse inverse %.4f (%d builds)\n",
+                      setup.patterns / solves, setup.smoother / solves, setup.prolongator / solves,
+                      setup.galerkin / solves, setup.coarse / solves, report.preconditionerBuilds);
       }
       std::fflush(stdout);
     }

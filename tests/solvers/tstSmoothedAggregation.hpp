@@ -2,11 +2,14 @@
 // and 100 % PD plate tangents: the tentative prolongator reproduces the near-null space, the
 // V-cycle is symmetric, PCG with it matches block-Jacobi PCG in far fewer iterations that
 // barely grow under mesh refinement, Newton with it matches Newton with block Jacobi, and a
-// model free to move gives a clear error.
+// model free to move gives a clear error; the coarsest level's dense inverse, computed on the
+// execution space, matches a host factorization and rejects singular and indefinite matrices.
 #include <perishell/io/deck.hpp>
 #include <perishell/solvers/implicit/static_solver_from_model.hpp>
+#include <perishell/solvers/multigrid/coarse_inverse.hpp>
 #include <perishell/solvers/multigrid/smoothed_aggregation.hpp>
 
+#include <Eigen/Dense>
 #include <Eigen/Sparse>
 
 #include <cmath>
@@ -531,4 +534,112 @@ TEST(TEST_CATEGORY, smoothed_aggregation_products_are_consistent_on_the_tie_plat
   const auto system = assemblePlate(tiePlate());
   const Amg hierarchy(Exec{}, system.A, system.positions);
   expectConsistentHierarchy(hierarchy);
+}
+
+namespace perishell_test_smoothed_aggregation {
+
+using CoarseInverse = perishell::multigrid::CoarseInverse<Exec>;
+
+// dense stored as CRS with every entry (zeros included)
+Matrix denseAsCrs(const Eigen::MatrixXd& dense) {
+  const auto n = static_cast<LocalIndex>(dense.rows());
+  Kokkos::View<RowOffset*, Kokkos::HostSpace> rowMap("row map", n + 1);
+  Kokkos::View<LocalIndex*, Kokkos::HostSpace> columns("columns", static_cast<std::size_t>(n) * n);
+  Kokkos::View<double*, Kokkos::HostSpace> values("values", static_cast<std::size_t>(n) * n);
+  for (LocalIndex row = 0; row <= n; ++row) rowMap(row) = static_cast<RowOffset>(row) * n;
+  for (LocalIndex row = 0; row < n; ++row)
+    for (LocalIndex column = 0; column < n; ++column) {
+      columns(static_cast<std::size_t>(row) * n + column) = column;
+      values(static_cast<std::size_t>(row) * n + column) = dense(row, column);
+    }
+  return Matrix("dense", n, n, static_cast<RowOffset>(n) * n, Kokkos::create_mirror_view_and_copy(Memory{}, values),
+                Kokkos::create_mirror_view_and_copy(Memory{}, rowMap),
+                Kokkos::create_mirror_view_and_copy(Memory{}, columns));
+}
+
+Eigen::MatrixXd coarseInverseOf(const Eigen::MatrixXd& dense) {
+  CoarseInverse coarse;
+  coarse.compute(Exec{}, denseAsCrs(dense), 3);
+  const auto host = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, coarse.inverse());
+  Eigen::MatrixXd inverse(dense.rows(), dense.cols());
+  for (Eigen::Index i = 0; i < dense.rows(); ++i)
+    for (Eigen::Index j = 0; j < dense.cols(); ++j) inverse(i, j) = host(i, j);
+  return inverse;
+}
+
+// Rows and columns scaled by units from 1e-3 to 1e6, as a coarse shell matrix mixes
+// translations and rotations.
+Eigen::MatrixXd withUnits(const Eigen::MatrixXd& M) {
+  Eigen::VectorXd units(M.rows());
+  for (Eigen::Index i = 0; i < M.rows(); ++i) units(i) = std::pow(10.0, -3.0 + 9.0 * (i % 7) / 6.0);
+  return units.asDiagonal() * M * units.asDiagonal();
+}
+
+std::string coarseFailure(const Eigen::MatrixXd& dense) {
+  try {
+    coarseInverseOf(dense);
+  } catch (const std::runtime_error& error) {
+    std::printf("%s\n", error.what());
+    return error.what();
+  }
+  return {};
+}
+
+}  // namespace perishell_test_smoothed_aggregation
+
+// The coarsest level is inverted by Gauss-Jordan in one team of the execution space
+// (coarse_inverse.hpp): the inverse of a badly scaled SPD matrix agrees with Eigen's to
+// round-off and is exactly symmetric; a non-symmetric one whose leading pivots vanish is
+// inverted through partial pivoting.
+TEST(TEST_CATEGORY, coarse_inverse_matches_a_host_factorization) {
+  using namespace perishell_test_smoothed_aggregation;
+  const int n = 60;
+  std::srand(7);
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(n, n);
+  const Eigen::MatrixXd spd = withUnits(B * B.transpose() + 0.1 * Eigen::MatrixXd::Identity(n, n));
+  const Eigen::MatrixXd inverse = coarseInverseOf(spd);
+  const Eigen::MatrixXd reference = spd.llt().solve(Eigen::MatrixXd::Identity(n, n));
+  const double error = (inverse - reference).norm() / reference.norm();
+  std::printf("SPD %d x %d, condition %.2e: relative error of the inverse %.2e\n", n, n,
+              spd.norm() * reference.norm(), error);
+  EXPECT_LT(error, 1e-9);
+  EXPECT_EQ((inverse - inverse.transpose()).norm(), 0.0);
+
+  // A cyclic shift of a well-conditioned matrix: its diagonal is small, elimination without
+  // row exchanges would divide by near-zero pivots.
+  Eigen::MatrixXd general = Eigen::MatrixXd::Random(n, n) + 5.0 * Eigen::MatrixXd::Identity(n, n);
+  Eigen::MatrixXd shifted(n, n);
+  for (int i = 0; i < n; ++i) shifted.row(i) = general.row((i + 1) % n);
+  const Eigen::MatrixXd& nonSymmetric = shifted;
+  const Eigen::MatrixXd generalInverse = coarseInverseOf(nonSymmetric);
+  const Eigen::MatrixXd generalReference = nonSymmetric.partialPivLu().inverse();
+  const double generalError = (generalInverse - generalReference).norm() / generalReference.norm();
+  std::printf("non-symmetric with a small diagonal: relative error of the inverse %.2e\n", generalError);
+  EXPECT_LT(generalError, 1e-9);
+}
+
+// A singular, an indefinite and a non-finite coarse matrix each stop the set-up with the
+// reason and the hint to check the supports.
+TEST(TEST_CATEGORY, coarse_inverse_rejects_singular_and_indefinite_matrices) {
+  using namespace perishell_test_smoothed_aggregation;
+  const int n = 40;
+  std::srand(11);
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(n, n - 1);  // rank n - 1: a mechanism
+  const std::string singular = coarseFailure(withUnits(B * B.transpose()));
+  EXPECT_NE(singular.find("singular"), std::string::npos) << singular;
+  EXPECT_NE(singular.find("level 3"), std::string::npos) << singular;
+  EXPECT_NE(singular.find("check the supports"), std::string::npos) << singular;
+
+  const Eigen::MatrixXd C = Eigen::MatrixXd::Random(n, n);
+  Eigen::VectorXd signs = Eigen::VectorXd::Ones(n);
+  signs(n / 2) = -1.0;
+  const Eigen::MatrixXd spd = C * C.transpose() + Eigen::MatrixXd::Identity(n, n);
+  const std::string indefinite = coarseFailure(withUnits(spd * signs.asDiagonal() * spd));
+  EXPECT_NE(indefinite.find("indefinite"), std::string::npos) << indefinite;
+  EXPECT_NE(indefinite.find("pivot"), std::string::npos) << indefinite;
+
+  Eigen::MatrixXd nonFinite = spd;
+  nonFinite(3, 5) = std::nan("");
+  const std::string notANumber = coarseFailure(nonFinite);
+  EXPECT_NE(notANumber.find("NaN or Inf"), std::string::npos) << notANumber;
 }

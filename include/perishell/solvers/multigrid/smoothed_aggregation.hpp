@@ -18,18 +18,21 @@
 //   omega = 4 / (3 lambda_max(D^-1 A)) (power iterations);
 // - A_{l+1} = P^T A P (sparse_product.hpp: patterns once on the host, values on the device
 //   at every update()).
-// The coarsest matrix (a few hundred DOF) is inverted densely on the host (Eigen) at setup
-// and applied on the device as a dense matrix-vector product.
+// The coarsest matrix (a few hundred DOF) is inverted densely where the hierarchy lives
+// (coarse_inverse.hpp) and applied as a dense matrix-vector product: a rebuild on the GPU
+// copies no matrix to the host.
 //
 // One V-cycle with the same Chebyshev smoother (block-Jacobi scaled, a polynomial in
 // D^-1 A, hence self-adjoint in the A inner product) before and after the coarse correction,
 // and R = P^T exactly, so the preconditioner is symmetric, as CG needs. Apply() runs only
 // device kernels.
+#include <perishell/core/fenced_seconds.hpp>
 #include <perishell/core/types.hpp>
 #include <perishell/solvers/belos/block_jacobi.hpp>
 #include <perishell/solvers/belos/crs_operator.hpp>
 #include <perishell/solvers/belos/kokkos_multivector.hpp>
 #include <perishell/solvers/multigrid/aggregation.hpp>
+#include <perishell/solvers/multigrid/coarse_inverse.hpp>
 #include <perishell/solvers/multigrid/sparse_product.hpp>
 
 #include <BelosOperator.hpp>
@@ -42,8 +45,7 @@
 #include <KokkosSparse_spmv.hpp>
 #include <Kokkos_Core.hpp>
 
-#include <Eigen/Dense>
-
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <sstream>
@@ -52,8 +54,6 @@
 #include <vector>
 
 namespace perishell::multigrid {
-
-inline constexpr int dofPerNode = 6;
 
 struct SmoothedAggregationOptions {
   // Coarsening stops at this many nodes (6 DOF each); that level is inverted densely.
@@ -75,6 +75,17 @@ struct SmoothedAggregationOptions {
   // dx 0.5 mm, from 216 to 125 and 301 to 128 at 0.25 mm; CCM-only stayed at 40 and 39
   // (docs/implicit.md, "Strength of connection"). 0 aggregates over every stored block.
   double dropTolerance = 0.05;
+};
+
+// Seconds of each part of the set-up, the construction and every update() together, each
+// part fenced: where a rebuild's time goes (perf/implicit_solve.cpp prints them).
+struct SmoothedAggregationSetupSeconds {
+  double patterns = 0.0;     // aggregation and product patterns (host, at construction)
+  double smoother = 0.0;     // fine-matrix copy, rigid-body modes, block inverses, D^-1 A, lambda_max
+  double prolongator = 0.0;  // QR of the near-null space, D^-1 A P_tent, smoothing, P^T
+  double galerkin = 0.0;     // A P and P^T (A P)
+  double coarse = 0.0;       // the coarsest level's dense inverse
+  double total() const { return patterns + smoother + prolongator + galerkin + coarse; }
 };
 
 namespace detail {
@@ -312,6 +323,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
   SmoothedAggregationPreconditioner(const ExecutionSpaceT& space, const matrix_type& A, const positions_type& positions,
                                     const SmoothedAggregationOptions& options = {})
       : space_(space), options_(options) {
+    const auto start = std::chrono::steady_clock::now();
     checkInput(A, positions);
     if (options.maxCoarseNodes < 1 || options.maxLevels < 1 || options.chebyshevDegree < 1 ||
         options.powerIterations < 1 || !(options.chebyshevEigenRatio > 1.0) ||
@@ -319,6 +331,12 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
       throw std::invalid_argument(std::string(who) +
                                   ": options need maxCoarseNodes, maxLevels, chebyshevDegree, powerIterations >= 1, "
                                   "chebyshevEigenRatio > 1 and 0 <= dropTolerance < 1");
+    if (!hasNodalBlockLayout(Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), A.graph.row_map),
+                             Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), A.graph.entries), A.numRows(),
+                             A.numCols()))
+      throw std::invalid_argument(std::string(who) +
+                                  ": the matrix needs the nodal block layout (the 6 rows of a node share one sorted "
+                                  "column pattern of whole 6 x 6 blocks)");
     levels_.emplace_back();
     snapshotFineMatrix(A);
     levels_[0].nearNullSpace = near_null_space_type("perishell::amg::near_null_space_0", A.numRows());
@@ -335,6 +353,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
       buildTransfer(l, aggregates);
     }
     factorCoarsest();
+    setupSeconds_.patterns = fencedSecondsSince(space_, start) - setupSeconds_.total();
   }
 
   // Recomputes every numeric part for a new tangent A (same pattern as at construction) and
@@ -345,8 +364,10 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     if (A.nnz() != levels_[0].A.nnz())
       throw std::invalid_argument(std::string(who) + "::update: the matrix has " + std::to_string(A.nnz()) +
                                   " entries, the hierarchy was built for " + std::to_string(levels_[0].A.nnz()));
+    const auto start = std::chrono::steady_clock::now();
     snapshotFineMatrix(A);
     detail::rigidBodyModes(space_, A, positions, levels_[0].nearNullSpace);
+    setupSeconds_.smoother += fencedSecondsSince(space_, start);
     for (std::size_t l = 0; l + 1 < levels_.size(); ++l) computeTransfer(l);
     factorCoarsest();
   }
@@ -359,6 +380,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
   // The restriction from level to level + 1 (P^T, computed by transposition).
   const matrix_type& restrictor(int level) const { return levels_.at(level).R; }
   const near_null_space_type& nearNullSpace(int level) const { return levels_.at(level).nearNullSpace; }
+  const SmoothedAggregationSetupSeconds& setupSeconds() const { return setupSeconds_; }
 
   void Apply(const Belos::MultiVec<double>& x, Belos::MultiVec<double>& y,
              Belos::ETrans /*trans: the V-cycle is symmetric*/ = Belos::NOTRANS) const override {
@@ -488,6 +510,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
 
   // Block inverses, D^-1 A, lambda_max and the QR of the near-null space.
   void computeFineNumerics(std::size_t l) {
+    auto start = std::chrono::steady_clock::now();
     Level& level = levels_[l];
     const LocalIndex failed =
         belos::detail::invertDiagonalBlocks(level.A, dofPerNode, level.blockInverses, level.blockDiagnoses);
@@ -501,79 +524,38 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
       throw std::runtime_error(std::string(who) + ": level " + std::to_string(l) +
                                ": the largest eigenvalue of D^-1 A is " + std::to_string(level.lambdaMax) +
                                " (a zero or non-finite matrix?)");
+    setupSeconds_.smoother += fencedSecondsSince(space_, start);
+    start = std::chrono::steady_clock::now();
     detail::tentativeProlongator(space_, level.aggregateOffsets, level.aggregateMembers, level.nearNullSpace,
                                  level.Ptent.values, levels_[l + 1].nearNullSpace);
+    setupSeconds_.prolongator += fencedSecondsSince(space_, start);
   }
 
   // Z = D^-1 A P_tent, P = P_tent - omega Z, R = P^T.
   void computeProlongator(std::size_t l) {
+    const auto start = std::chrono::steady_clock::now();
     Level& level = levels_[l];
     multiplyInto(space_, level.scaledA, level.Ptent, level.Z);
     const double omega = 4.0 / (3.0 * level.lambdaMax);
     detail::smoothProlongator(space_, level.aggregateOf, level.Ptent.values, level.Z, omega, level.P.values);
     transposeInto(space_, level.P, level.restriction);
+    setupSeconds_.prolongator += fencedSecondsSince(space_, start);
   }
 
   // A_{l+1} = R (A P).
   void computeGalerkin(std::size_t l) {
+    const auto start = std::chrono::steady_clock::now();
     Level& level = levels_[l];
     multiplyInto(space_, level.A, level.P, level.AP);
     multiplyInto(space_, level.R, level.AP, levels_[l + 1].A);
     detail::unitDiagonalOnEmptyRows(space_, levels_[l + 1].A);
-    space_.fence();
+    setupSeconds_.galerkin += fencedSecondsSince(space_, start);
   }
 
-  // Dense inverse of the coarsest matrix, computed on the host with Eigen (a few hundred DOF)
-  // after symmetric diagonal scaling, so the singularity test does not depend on units.
-  // A symmetric matrix (the tangent CG solves with) must be positive definite (Cholesky, and
-  // the inverse symmetrised so that the V-cycle stays symmetric); a non-symmetric one (the
-  // exact tangent under applied moments, solved by GMRES) need only be non-singular (LU).
   void factorCoarsest() {
-    const matrix_type& A = levels_.back().A;
-    const auto n = static_cast<Eigen::Index>(A.numRows());
-    const auto rowMap = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), A.graph.row_map);
-    const auto entries = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), A.graph.entries);
-    const auto values = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), A.values);
-    Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(n, n);
-    for (Eigen::Index row = 0; row < n; ++row)
-      for (RowOffset k = rowMap(row); k < rowMap(row + 1); ++k) dense(row, entries(k)) += values(k);
-    if (!dense.allFinite())
-      throw std::runtime_error(std::string(who) + ": the coarse matrix (level " + std::to_string(levels_.size() - 1) +
-                               ") has NaN or Inf entries");
-    Eigen::VectorXd scale(n);
-    for (Eigen::Index i = 0; i < n; ++i) scale(i) = dense(i, i) > 0.0 ? 1.0 / std::sqrt(dense(i, i)) : 1.0;
-    const Eigen::MatrixXd scaled = scale.asDiagonal() * dense * scale.asDiagonal();
-    const bool symmetric = (scaled - scaled.transpose()).norm() <= 1e-12 * scaled.norm();
-    const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(n, n);
-    Eigen::MatrixXd inverse;
-    double rcond = 0.0;
-    if (symmetric) {
-      const Eigen::LLT<Eigen::MatrixXd> cholesky(0.5 * (scaled + scaled.transpose()));
-      if (cholesky.info() == Eigen::Success) {
-        rcond = cholesky.rcond();
-        inverse = cholesky.solve(identity);
-        inverse = 0.5 * (inverse + inverse.transpose()).eval();
-      }
-    } else {
-      const Eigen::PartialPivLU<Eigen::MatrixXd> lu(scaled);
-      rcond = lu.rcond();
-      inverse = lu.solve(identity);
-    }
-    if (!(rcond > belos::detail::singularPivot) || !inverse.allFinite()) {
-      std::ostringstream msg;
-      msg << who << ": the coarse problem (level " << levels_.size() - 1 << ", " << n << " DOF) is singular"
-          << (symmetric ? " or indefinite" : "") << " (reciprocal condition estimate " << rcond
-          << " after diagonal scaling): the model is free to move as a rigid body or is a mechanism; check the "
-             "supports";
-      throw std::runtime_error(msg.str());
-    }
-    inverse = (scale.asDiagonal() * inverse * scale.asDiagonal()).eval();
-    if (coarseInverse_.extent(0) != static_cast<std::size_t>(n))
-      coarseInverse_ = decltype(coarseInverse_)("perishell::amg::coarse_inverse", n, n);
-    const auto host = Kokkos::create_mirror_view(coarseInverse_);
-    for (Eigen::Index i = 0; i < n; ++i)
-      for (Eigen::Index j = 0; j < n; ++j) host(i, j) = inverse(i, j);
-    Kokkos::deep_copy(coarseInverse_, host);
+    const auto start = std::chrono::steady_clock::now();
+    coarse_.compute(space_, levels_.back().A, static_cast<int>(levels_.size()) - 1);
+    setupSeconds_.coarse += fencedSecondsSince(space_, start);
   }
 
   // Chebyshev iteration for A x = b scaled by D^-1 (Ifpack2's Chebyshev: Saad, Iterative
@@ -612,7 +594,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
   template <class BView, class XView>
   void vCycle(std::size_t l, const BView& b, const XView& x) const {
     if (l + 1 == levels_.size()) {
-      KokkosBlas::gemv("N", 1.0, coarseInverse_, b, 0.0, x);
+      KokkosBlas::gemv("N", 1.0, coarse_.inverse(), b, 0.0, x);
       return;
     }
     const Level& level = levels_[l];
@@ -629,7 +611,8 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
   SmoothedAggregationOptions options_;
   std::vector<Level> levels_;
   typename matrix_type::values_type::non_const_type fineValues_;
-  Kokkos::View<double**, Kokkos::LayoutLeft, detail::DeviceOf<ExecutionSpaceT>> coarseInverse_;
+  CoarseInverse<ExecutionSpaceT> coarse_;
+  SmoothedAggregationSetupSeconds setupSeconds_;
 };
 
 }  // namespace perishell::multigrid
