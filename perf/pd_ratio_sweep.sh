@@ -20,10 +20,12 @@
 #       (default the deck's 0.5e-3).
 # AMG_DROP_TOLERANCE=T (pressed only) sets the deck's solver.amg-drop-tolerance, for an A/B of
 #       the aggregation (0: every coupling, as before 2026-12-06; default 0.05).
+# AMG_REUSE=G (pressed only) sets the deck's solver.amg-reuse (the hierarchy's reuse growth
+#       limit; 0 rebuilds it at every Newton iteration; default 1.5).
 # Each run's full log is kept next to the CSV (OUT.csv.ratio-R.log).
 set -euo pipefail
 if [[ $# -lt 3 ]]; then
-  sed -n '2,22p' "$0" >&2
+  sed -n '2,24p' "$0" >&2
   exit 2
 fi
 app=$1 case=$2 csv=$3 limit=${4:-}
@@ -57,6 +59,11 @@ deck_for() {
       if [[ -n ${AMG_DROP_TOLERANCE:-} ]]; then
         sed -i -e "s/^    preconditioner: amg$/    preconditioner: amg\n    amg-drop-tolerance: $AMG_DROP_TOLERANCE/" "$deck"
         grep -q "amg-drop-tolerance: $AMG_DROP_TOLERANCE\$" "$deck" ||
+          { echo "pd_ratio_sweep: $base has no 'preconditioner: amg' line" >&2; exit 1; }
+      fi
+      if [[ -n ${AMG_REUSE:-} ]]; then
+        sed -i -e "s/^    preconditioner: amg$/    preconditioner: amg\n    amg-reuse: $AMG_REUSE/" "$deck"
+        grep -q "amg-reuse: $AMG_REUSE\$" "$deck" ||
           { echo "pd_ratio_sweep: $base has no 'preconditioner: amg' line" >&2; exit 1; }
       fi ;;
     steel | steel-fine)

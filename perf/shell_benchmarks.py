@@ -279,7 +279,7 @@ def run(app, deck_path, backend, log_path):
             "newton": number(r"Newton iterations +([0-9]+)"),
             "krylov": number(r"linear iterations +([0-9]+)"),
             "factorizations": number(r"\(([0-9]+) factorizations[,)]"),
-            "builds": number(r"\(([0-9]+) AMG builds\)"),
+            "builds": number(r"\(([0-9]+) AMG builds?\)"),
             "max_u": number(r"max displacement +([0-9.e+-]+) m"),
             "limit": "yes" if "tangent             lost positive definiteness" in text else "no",
             "error": "" if result.returncode == 0 else text.strip().splitlines()[-1][:160]}

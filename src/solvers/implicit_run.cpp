@@ -442,7 +442,8 @@ ImplicitRunSummary runImplicitOn(const ExecutionSpaceT& space, const model::Mode
       .add("  constraints", formatNumber(phases.constraints) + " s")
       .add("  preconditioner", formatNumber(phases.preconditioner) + " s" +
                                    (summary.preconditionerBuilds > 0
-                                        ? " (" + std::to_string(summary.preconditionerBuilds) + " AMG builds)"
+                                        ? " (" + std::to_string(summary.preconditionerBuilds) + " AMG build" +
+                                              (summary.preconditionerBuilds == 1 ? ")" : "s)")
                                         : std::string()) +
                                    (summary.factorizations > 0
                                         ? " (" + std::to_string(summary.factorizations) + " factorizations" +
