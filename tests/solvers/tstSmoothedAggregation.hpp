@@ -643,3 +643,24 @@ TEST(TEST_CATEGORY, coarse_inverse_rejects_singular_and_indefinite_matrices) {
   const std::string notANumber = coarseFailure(nonFinite);
   EXPECT_NE(notANumber.find("NaN or Inf"), std::string::npos) << notANumber;
 }
+
+// The set-up is timed by part (perishell_perf_implicit_solve prints the parts): construction
+// fills every part, an update adds to each numeric part and leaves the patterns alone.
+TEST(TEST_CATEGORY, smoothed_aggregation_times_its_setup_by_part) {
+  using namespace perishell_test_smoothed_aggregation;
+  const auto system = assemblePlate(tiePlate());
+  Amg hierarchy(Exec{}, system.A, system.positions);
+  const auto built = hierarchy.setupSeconds();
+  EXPECT_GT(built.patterns, 0.0);
+  EXPECT_GT(built.smoother, 0.0);
+  EXPECT_GT(built.prolongator, 0.0);
+  EXPECT_GT(built.galerkin, 0.0);
+  EXPECT_GT(built.coarse, 0.0);
+  hierarchy.update(system.A, system.positions);
+  const auto updated = hierarchy.setupSeconds();
+  EXPECT_EQ(updated.patterns, built.patterns);
+  EXPECT_GT(updated.smoother, built.smoother);
+  EXPECT_GT(updated.prolongator, built.prolongator);
+  EXPECT_GT(updated.galerkin, built.galerkin);
+  EXPECT_GT(updated.coarse, built.coarse);
+}
