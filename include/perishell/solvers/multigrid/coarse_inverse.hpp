@@ -122,14 +122,17 @@ struct EliminationFailure {
 // singularPivot (positive definiteness of a symmetric matrix); with partial pivoting its
 // magnitude must.
 template <class ExecutionSpaceT>
+using EliminationFailureView = Kokkos::View<double[2], typename CoarseDense<ExecutionSpaceT>::device_type>;
+
+// failure: where the failed step and its pivot are written (step -1 for none).
+template <class ExecutionSpaceT>
 EliminationFailure gaussJordan(const ExecutionSpaceT& space, const CoarseDense<ExecutionSpaceT>& work,
-                               const CoarseDense<ExecutionSpaceT>& inverse, bool pivoting) {
+                               const CoarseDense<ExecutionSpaceT>& inverse, bool pivoting,
+                               const EliminationFailureView<ExecutionSpaceT>& failure) {
   using Policy = Kokkos::TeamPolicy<ExecutionSpaceT>;
   using Member = typename Policy::member_type;
   using Location = Kokkos::MaxLoc<double, LocalIndex>;
   const LocalIndex n = static_cast<LocalIndex>(work.extent(0));
-  const Kokkos::View<double[2], typename CoarseDense<ExecutionSpaceT>::device_type> failure(
-      "perishell::amg::coarse_failure");
   const double tiny = belos::detail::singularPivot;
   const auto kernel = KOKKOS_LAMBDA(const Member& member) {
     for (LocalIndex step = 0; step < n; ++step) {
@@ -237,7 +240,7 @@ class CoarseInverse {
     const bool symmetric = detail::frobeniusNorm(space, work_, true) <= 1e-12 * norm;
     if (symmetric) detail::symmetrize(space, work_);
     const double normOfScaled = detail::oneNorm(space, work_);
-    const detail::EliminationFailure failure = detail::gaussJordan(space, work_, inverse_, !symmetric);
+    const detail::EliminationFailure failure = detail::gaussJordan(space, work_, inverse_, !symmetric, failure_);
     double rcond = 0.0;
     if (failure.step < 0) {
       const double normOfInverse = detail::oneNorm(space, inverse_);
@@ -267,6 +270,7 @@ class CoarseInverse {
 
   dense_type inverse_, work_;
   detail::CoarseScale<ExecutionSpaceT> scale_;
+  detail::EliminationFailureView<ExecutionSpaceT> failure_{"perishell::amg::coarse_failure"};
 };
 
 }  // namespace perishell::multigrid

@@ -331,12 +331,6 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
       throw std::invalid_argument(std::string(who) +
                                   ": options need maxCoarseNodes, maxLevels, chebyshevDegree, powerIterations >= 1, "
                                   "chebyshevEigenRatio > 1 and 0 <= dropTolerance < 1");
-    if (!hasNodalBlockLayout(Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), A.graph.row_map),
-                             Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), A.graph.entries), A.numRows(),
-                             A.numCols()))
-      throw std::invalid_argument(std::string(who) +
-                                  ": the matrix needs the nodal block layout (the 6 rows of a node share one sorted "
-                                  "column pattern of whole 6 x 6 blocks)");
     levels_.emplace_back();
     snapshotFineMatrix(A);
     levels_[0].nearNullSpace = near_null_space_type("perishell::amg::near_null_space_0", A.numRows());
