@@ -703,7 +703,7 @@ deck::Solver readSolver(const Section& section) {
                                               "damping", "shell-element", "hourglass"};
   const std::vector<std::string> implicitKeys{"type", "increments", "max-iterations", "tolerance",
                                               "preconditioner", "max-cuts", "tangent", "amg-reuse",
-                                              "amg-drop-tolerance", "line-search", "control", "max-increments",
+                                              "amg-drop-tolerance", "amg-coarse-nodes", "line-search", "control", "max-increments",
                                               "newton", "factorization"};
   std::vector<std::string> allKeys = explicitKeys;
   allKeys.insert(allKeys.end(), implicitKeys.begin() + 1, implicitKeys.end());
@@ -797,6 +797,11 @@ deck::Solver readSolver(const Section& section) {
     if (!(settings.amgDropTolerance >= 0.0 && settings.amgDropTolerance < 1.0))
       section.fail("amg-drop-tolerance", "must be in [0, 1) (0 aggregates over every coupling), got " +
                                              formatNumber(settings.amgDropTolerance));
+    const long long coarseNodes = section.integer("amg-coarse-nodes", settings.amgCoarseNodes);
+    if (coarseNodes < 1 || coarseNodes > 2000)
+      section.fail("amg-coarse-nodes", "must be a whole number in [1, 2000] (nodes of the densely inverted coarsest "
+                                       "level), got " + std::to_string(coarseNodes));
+    settings.amgCoarseNodes = static_cast<int>(coarseNodes);
   }
   return solver;
 }

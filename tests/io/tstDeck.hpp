@@ -282,6 +282,7 @@ perishell:
     tangent: exact
     amg-reuse: 2.0
     amg-drop-tolerance: 0.1
+    amg-coarse-nodes: 120
     newton: displacement
     factorization: host
   output:
@@ -360,6 +361,7 @@ perishell:
   EXPECT_EQ(deck.solver.implicitSettings.tangent, deck::Tangent::Exact);
   EXPECT_DOUBLE_EQ(deck.solver.implicitSettings.amgReuse, 2.0);
   EXPECT_DOUBLE_EQ(deck.solver.implicitSettings.amgDropTolerance, 0.1);
+  EXPECT_EQ(deck.solver.implicitSettings.amgCoarseNodes, 120);
   EXPECT_EQ(deck.solver.implicitSettings.newton, deck::ImplicitSettings::Newton::Displacement);
   EXPECT_EQ(deck.solver.implicitSettings.factorization, deck::Factorization::Host);
 
@@ -611,6 +613,8 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
        {"must be 0 (rebuild the multigrid hierarchy at every Newton iteration) or a growth factor in [1, 100], got 0.5"}},
       {"amg drop tolerance of 1", {{"    increments: 10\n", "    increments: 10\n    amg-drop-tolerance: 1\n"}},
        "solver.amg-drop-tolerance", {"must be in [0, 1) (0 aggregates over every coupling), got 1"}},
+      {"amg coarse nodes of 0", {{"    increments: 10\n", "    increments: 10\n    amg-coarse-nodes: 0\n"}},
+       "solver.amg-coarse-nodes", {"must be a whole number in [1, 2000]", "got 0"}},
       {"unknown generator", {{"generator: plate", "generator: disc"}}, "mesh.generator",
        {"'disc' is not one of plate, cylinder, hexagonal-prism, gmsh"}},
       {"unsupported version", {{"version: 1", "version: 2"}}, "version", {"unsupported deck version 2"}},

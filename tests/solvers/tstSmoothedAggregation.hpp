@@ -351,10 +351,15 @@ TEST(TEST_CATEGORY, smoothed_aggregation_iterations_are_mesh_independent_pd) {
 // strong couplings the same V-cycle needs far fewer PCG iterations.
 TEST(TEST_CATEGORY, smoothed_aggregation_strong_couplings_cut_pd_iterations) {
   using namespace perishell_test_smoothed_aggregation;
-  perishell::multigrid::SmoothedAggregationOptions wholeHorizons;
+  // Both coarsen down to the small coarsest level, so that only the aggregation differs: on
+  // this small plate whole horizons coarsen to a level the default budget inverts densely
+  // (20 iterations, a two-level method).
+  perishell::multigrid::SmoothedAggregationOptions strong;
+  strong.maxCoarseNodes = strong.smallCoarseNodes;
+  perishell::multigrid::SmoothedAggregationOptions wholeHorizons = strong;
   wholeHorizons.dropTolerance = 0.0;
   const int before = amgIterations("pd", 48, wholeHorizons);
-  const int after = amgIterations("pd", 48);
+  const int after = amgIterations("pd", 48, strong);
   // Measured 45 and 34; the pressed plate 4.2.1 gains more (docs/implicit.md).
   EXPECT_LE(after, 0.85 * before);
 }
@@ -442,8 +447,8 @@ perishell::model::Model tiePlate() {
   return clampedLeftPlate(0.090, 1.0e-3, "{pull: {type: edge-traction, set: right, value: 1.0e6}}");
 }
 
-// A 20 x 30 mm plate under pressure, dx 0.25 mm: 121 clamped nodes, more than the coarsest
-// level may hold (SmoothedAggregationOptions::maxCoarseNodes).
+// A 20 x 30 mm plate under pressure, dx 0.25 mm: 121 clamped nodes, more than a small
+// coarsest level holds (SmoothedAggregationOptions::smallCoarseNodes).
 perishell::model::Model clampedPlate() {
   return clampedLeftPlate(0.020, 0.25e-3, "{press: {type: pressure, value: 1.0e4}}");
 }
@@ -503,19 +508,51 @@ TEST(TEST_CATEGORY, aggregation_puts_decoupled_nodes_into_one_aggregate) {
 TEST(TEST_CATEGORY, smoothed_aggregation_coarsens_past_a_clamped_edge) {
   using namespace perishell_test_smoothed_aggregation;
   const auto system = assemblePlate(clampedPlate());
-  const Amg hierarchy(Exec{}, system.A, system.positions);
+  perishell::multigrid::SmoothedAggregationOptions small;
+  small.maxCoarseNodes = small.smallCoarseNodes;
+  const Amg hierarchy(Exec{}, system.A, system.positions, small);
   const int coarsest = hierarchy.matrix(hierarchy.numLevels() - 1).numRows() / 6;
   std::printf("clamped plate 80x120: %d levels, coarsest %d nodes\n", hierarchy.numLevels(), coarsest);
-  EXPECT_LE(coarsest, perishell::multigrid::SmoothedAggregationOptions{}.maxCoarseNodes);
+  EXPECT_LE(coarsest, small.smallCoarseNodes);
   expectConsistentHierarchy(hierarchy);
   const auto reference = solve(system, blockJacobi(system), 1e-10);
-  const auto amgSolve = solve(system, amg(system), 1e-10);
+  const auto amgSolve = solve(system, amg(system, small), 1e-10);
   EXPECT_TRUE(amgSolve.result.converged);
   EXPECT_LT(relativeDifference(amgSolve.x, reference.x), 1e-6);
 }
 
 // In-plane loading of a clamped thin plate: with 10 power iterations the lambda_max estimate
 // was low enough to make the V-cycle indefinite (CG broke down); the default must converge.
+// The coarsest level is inverted densely up to maxCoarseNodes nodes where the inverse costs
+// at most denseInverseBudget products with the fine matrix: on the clamped plate the hierarchy
+// stops at a level between the small and the largest coarse size, one level earlier than with
+// a zero budget, and PCG needs fewer iterations for the same solution.
+TEST(TEST_CATEGORY, smoothed_aggregation_inverts_a_larger_coarsest_level_where_it_is_cheap) {
+  using namespace perishell_test_smoothed_aggregation;
+  const auto system = assemblePlate(clampedPlate());
+  const perishell::multigrid::SmoothedAggregationOptions larger;
+  perishell::multigrid::SmoothedAggregationOptions noBudget;
+  noBudget.denseInverseBudget = 0.0;
+  const Amg withLarger(Exec{}, system.A, system.positions, larger);
+  const Amg withSmall(Exec{}, system.A, system.positions, noBudget);
+  const int coarsest = withLarger.matrix(withLarger.numLevels() - 1).numRows() / 6;
+  const int smallCoarsest = withSmall.matrix(withSmall.numLevels() - 1).numRows() / 6;
+  const auto reference = solve(system, blockJacobi(system), 1e-10);
+  const auto largerSolve = solve(system, amg(system, larger), 1e-10);
+  const auto smallSolve = solve(system, amg(system, noBudget), 1e-10);
+  std::printf("clamped plate 80x120: coarsest %d nodes (%d levels), PCG %d; with no budget %d nodes (%d levels), "
+              "PCG %d\n",
+              coarsest, withLarger.numLevels(), largerSolve.result.iterations, smallCoarsest, withSmall.numLevels(),
+              smallSolve.result.iterations);
+  EXPECT_GT(coarsest, larger.smallCoarseNodes);
+  EXPECT_LE(coarsest, larger.maxCoarseNodes);
+  EXPECT_LE(smallCoarsest, noBudget.smallCoarseNodes);
+  EXPECT_EQ(withSmall.numLevels(), withLarger.numLevels() + 1);
+  EXPECT_TRUE(largerSolve.result.converged);
+  EXPECT_LT(largerSolve.result.iterations, smallSolve.result.iterations);
+  EXPECT_LT(relativeDifference(largerSolve.x, reference.x), 1e-6);
+}
+
 TEST(TEST_CATEGORY, smoothed_aggregation_pcg_converges_on_the_tie_plate) {
   using namespace perishell_test_smoothed_aggregation;
   const auto system = assemblePlate(tiePlate());

@@ -209,6 +209,9 @@ struct ImplicitSettings {
   // Couplings weaker than this (scaled) are ignored by the AMG aggregation
   // (multigrid::SmoothedAggregationOptions::dropTolerance).
   double amgDropTolerance = 0.05;
+  // The most nodes of the AMG's densely inverted coarsest level
+  // (multigrid::SmoothedAggregationOptions::maxCoarseNodes).
+  int amgCoarseNodes = 200;
   bool lineSearch = false;  // solvers::NewtonOptions::lineSearch
   // Mixed: the shell elements' local forces are Newton unknowns of their own
   // (solvers::NewtonOptions::mixedFormat); Displacement: the classical Newton.

@@ -131,6 +131,8 @@ struct NewtonOptions {
   double amgReuseGrowth = 1.5;
   // multigrid::SmoothedAggregationOptions::dropTolerance (deck solver.amg-drop-tolerance).
   double amgDropTolerance = multigrid::SmoothedAggregationOptions{}.dropTolerance;
+  // multigrid::SmoothedAggregationOptions::maxCoarseNodes (deck solver.amg-coarse-nodes).
+  LocalIndex amgCoarseNodes = multigrid::SmoothedAggregationOptions{}.maxCoarseNodes;
   // Mixed-format Newton (docs/implicit.md): the shell elements' local forces s are carried
   // from iteration to iteration as independent unknowns, s <- K_l (d + B du), and the next
   // tangent's initial-stress term takes them in place of K_l d at the new state. Converged

@@ -578,6 +578,7 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveOnce(const Matrix& K, 
       updateCurrentPositions();
       multigrid::SmoothedAggregationOptions multigridOptions;
       multigridOptions.dropTolerance = options_.amgDropTolerance;
+      multigridOptions.maxCoarseNodes = options_.amgCoarseNodes;
       onEveryRank("the multigrid preconditioner", [&] {
         if (multigrid_)
           multigrid_->update(preconditionerMatrix(K), currentPositions_);

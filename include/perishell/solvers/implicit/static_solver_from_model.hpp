@@ -29,6 +29,8 @@ bool appliesMoments(const ExternalActions<MemorySpaceT>& actions) {
 
 static_assert(deck::ImplicitSettings{}.amgDropTolerance == multigrid::SmoothedAggregationOptions{}.dropTolerance,
               "the deck's default solver.amg-drop-tolerance is the multigrid's default");
+static_assert(deck::ImplicitSettings{}.amgCoarseNodes == multigrid::SmoothedAggregationOptions{}.maxCoarseNodes,
+              "the deck's default solver.amg-coarse-nodes is the multigrid's default");
 
 // The deck's Newton settings; momentsApplied: whether any load has a moment component (on any rank).
 inline NewtonOptions newtonOptions(const model::Model& model, bool momentsApplied) {
@@ -42,6 +44,7 @@ inline NewtonOptions newtonOptions(const model::Model& model, bool momentsApplie
   options.arcLengthFirstStep = 1.0 / settings.increments;
   options.amgReuseGrowth = settings.amgReuse;
   options.amgDropTolerance = settings.amgDropTolerance;
+  options.amgCoarseNodes = settings.amgCoarseNodes;
   options.preconditioner = settings.preconditioner;
   options.factorization = settings.factorization;
   options.tangent = settings.tangent == deck::Tangent::Exact || (settings.tangent == deck::Tangent::Auto && momentsApplied)

@@ -1,18 +1,19 @@
 #pragma once
-// The coarsest level of the smoothed-aggregation hierarchy (a few hundred DOF) inverted
-// densely where the hierarchy lives: Gauss-Jordan elimination in one team of the execution
-// space, so a hierarchy rebuilt on the GPU copies no matrix to the host and back (issue 21,
-// item 3). The V-cycle applies the inverse as one dense matrix-vector product, which is far
-// faster on a GPU than two triangular solves of a few hundred sequential steps.
+// The coarsest level of the smoothed-aggregation hierarchy (up to ~1000 DOF) inverted densely
+// where the hierarchy lives, so a hierarchy rebuilt on the GPU copies no matrix to the host
+// and back (issue 21, item 3). The V-cycle applies the inverse as one dense matrix-vector
+// product, which is far faster on a GPU than two triangular solves of hundreds of
+// sequential steps.
 //
 // The matrix is first scaled symmetrically to a unit diagonal, S = s A s with
 // s_i = 1 / sqrt(a_ii), so that the singularity test does not depend on units. A symmetric
-// matrix (the tangent CG solves with) must be positive definite: it is eliminated without
-// pivoting, whose pivots are those of its Cholesky factorization, all positive exactly when
-// it is. A non-symmetric one (the exact tangent under applied moments, solved by GMRES) need
-// only be non-singular: partial pivoting. Either way the inverse is accepted only when its
-// reciprocal condition number 1 / (|S|_1 |S^-1|_1), computed exactly from the inverse,
-// exceeds belos::detail::singularPivot.
+// matrix (the tangent CG solves with) must be positive definite: it is inverted by the
+// symmetric sweep operator, one pivot per device-wide rank-1 update, without pivoting; its
+// pivots are those of its Cholesky factorization, all positive exactly when it is. A
+// non-symmetric one (the exact tangent under applied moments, solved by GMRES) need only be
+// non-singular: Gauss-Jordan with partial pivoting in one team. Either way the inverse is
+// accepted only when its reciprocal condition number 1 / (|S|_1 |S^-1|_1), computed exactly
+// from the inverse, exceeds belos::detail::singularPivot.
 #include <perishell/core/types.hpp>
 #include <perishell/solvers/belos/block_jacobi.hpp>
 #include <perishell/solvers/belos/crs_operator.hpp>
@@ -116,18 +117,17 @@ struct EliminationFailure {
   double pivot = 0.0;
 };
 
-// Gauss-Jordan on [work | inverse] (inverse = I on entry, work^-1 on return) in one team: its
-// threads share each step's entries, consecutive threads on consecutive columns of a row
-// (coalesced on a GPU), a barrier between steps. Without pivoting a pivot must exceed
-// singularPivot (positive definiteness of a symmetric matrix); with partial pivoting its
-// magnitude must.
 template <class ExecutionSpaceT>
 using EliminationFailureView = Kokkos::View<double[2], typename CoarseDense<ExecutionSpaceT>::device_type>;
 
-// failure: where the failed step and its pivot are written (step -1 for none).
+// Gauss-Jordan with partial pivoting on [work | inverse] (inverse = I on entry, work^-1 on
+// return) in one team, for the non-symmetric coarse matrix of the exact tangent: its threads
+// share each step's entries, consecutive threads on consecutive columns of a row (coalesced on
+// a GPU), a barrier between steps; a pivot's magnitude must exceed singularPivot. failure:
+// where the failed step and its pivot are written (step -1 for none).
 template <class ExecutionSpaceT>
 EliminationFailure gaussJordan(const ExecutionSpaceT& space, const CoarseDense<ExecutionSpaceT>& work,
-                               const CoarseDense<ExecutionSpaceT>& inverse, bool pivoting,
+                               const CoarseDense<ExecutionSpaceT>& inverse,
                                const EliminationFailureView<ExecutionSpaceT>& failure) {
   using Policy = Kokkos::TeamPolicy<ExecutionSpaceT>;
   using Member = typename Policy::member_type;
@@ -136,7 +136,7 @@ EliminationFailure gaussJordan(const ExecutionSpaceT& space, const CoarseDense<E
   const double tiny = belos::detail::singularPivot;
   const auto kernel = KOKKOS_LAMBDA(const Member& member) {
     for (LocalIndex step = 0; step < n; ++step) {
-      if (pivoting) {
+      {
         typename Location::value_type largest;
         Kokkos::parallel_reduce(
             Kokkos::TeamThreadRange(member, step, n),
@@ -160,18 +160,17 @@ EliminationFailure gaussJordan(const ExecutionSpaceT& space, const CoarseDense<E
         member.team_barrier();
       }
       const double pivot = work(step, step);
-      if (!(pivoting ? Kokkos::Experimental::fabs(pivot) > tiny : pivot > tiny)) {
+      if (!(Kokkos::Experimental::fabs(pivot) > tiny)) {
         Kokkos::single(Kokkos::PerTeam(member), [&]() {
           failure(0) = static_cast<double>(step);
           failure(1) = pivot;
         });
         return;
       }
-      // Row `step` divided by the pivot. Work's columns left of the pivot are zero, and so
-      // are the identity part's right of it unless rows were swapped; column `step` of work
-      // is never read again.
+      // Row `step` divided by the pivot. Work's columns left of the pivot are zero; column
+      // `step` of work is never read again.
       const LocalIndex workColumns = n - step - 1;
-      const LocalIndex inverseColumns = pivoting ? n : step + 1;
+      const LocalIndex inverseColumns = n;
       const LocalIndex width = workColumns + inverseColumns;
       Kokkos::parallel_for(Kokkos::TeamThreadRange(member, width), [&](const LocalIndex c) {
         if (c < workColumns)
@@ -202,15 +201,88 @@ EliminationFailure gaussJordan(const ExecutionSpaceT& space, const CoarseDense<E
   return result;
 }
 
-// M = s M s
+// The symmetric sweep operator (Goodnight 1979; Beaton 1964) on the upper triangle of the
+// unit-diagonal scaled S, in place: sweeping pivot k replaces M_ij by M_ij - M_ik M_kj / d for
+// i, j != k, row and column k by M_kj / d and M_kk by -1 / d, with d = M_kk; after every
+// pivot M = -S^-1. The pivots are those of S's Cholesky factorization, so a positive
+// definite S has all of them above singularPivot and an indefinite or singular one fails.
+// Each step is a rank-1 update over the whole device (one launch per pivot: a matrix of
+// ~1000 rows no longer waits on one team). Column k enters step k as a copy (columns, two
+// buffers of n); step k writes column k + 1 into the other buffer, so no entry is read after
+// another thread wrote it. A failed step skips every later one.
 template <class ExecutionSpaceT>
-void scaleSymmetrically(const ExecutionSpaceT& space, const CoarseDense<ExecutionSpaceT>& M,
-                        const CoarseScale<ExecutionSpaceT>& scale) {
+EliminationFailure sweepSymmetric(const ExecutionSpaceT& space, const CoarseDense<ExecutionSpaceT>& M,
+                                  const CoarseDense<ExecutionSpaceT>& columns,
+                                  const EliminationFailureView<ExecutionSpaceT>& failure) {
+  using Policy = Kokkos::TeamPolicy<ExecutionSpaceT>;
+  using Member = typename Policy::member_type;
   const LocalIndex n = static_cast<LocalIndex>(M.extent(0));
+  const double tiny = belos::detail::singularPivot;
   Kokkos::parallel_for(
-      "perishell::amg::coarse_unscale", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, n),
+      "perishell::amg::coarse_sweep_start", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, n),
       KOKKOS_LAMBDA(const LocalIndex row) {
-        for (LocalIndex column = 0; column < n; ++column) M(row, column) *= scale(row) * scale(column);
+        columns(0, row) = M(row, 0);
+        if (row == 0) failure(0) = -1.0;
+      });
+  for (LocalIndex step = 0; step < n; ++step) {
+    const int current = step % 2, next = 1 - current;
+    Kokkos::parallel_for(
+        "perishell::amg::coarse_sweep", Policy(space, n, Kokkos::AUTO),
+        KOKKOS_LAMBDA(const Member& member) {
+          if (failure(0) >= 0.0) return;
+          const double pivot = columns(current, step);
+          const LocalIndex row = member.league_rank();
+          if (!(pivot > tiny)) {
+            Kokkos::single(Kokkos::PerTeam(member), [&]() {
+              if (row == 0) {
+                failure(0) = static_cast<double>(step);
+                failure(1) = pivot;
+              }
+            });
+            return;
+          }
+          const double reciprocal = 1.0 / pivot;
+          if (row == step) {
+            Kokkos::parallel_for(Kokkos::TeamThreadRange(member, row + 1, n), [&](const LocalIndex column) {
+              M(row, column) = columns(current, column) * reciprocal;
+            });
+          } else {
+            const double factor = columns(current, row) * reciprocal;
+            Kokkos::parallel_for(Kokkos::TeamThreadRange(member, row, n), [&](const LocalIndex column) {
+              M(row, column) -= factor * columns(current, column);
+            });
+          }
+          member.team_barrier();
+          Kokkos::single(Kokkos::PerTeam(member), [&]() {
+            if (row == step) M(row, row) = -reciprocal;
+            if (row < step) M(row, step) = columns(current, row) * reciprocal;
+            if (row <= step + 1 && step + 1 < n) columns(next, row) = M(row, step + 1);
+          });
+          if (row == step + 1)
+            Kokkos::parallel_for(Kokkos::TeamThreadRange(member, row + 1, n),
+                                 [&](const LocalIndex column) { columns(next, column) = M(row, column); });
+        });
+  }
+  const auto host = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), failure);
+  return {static_cast<LocalIndex>(host(0)), host(1)};
+}
+
+// inverse = s X s with X the negated upper triangle of `result`, mirrored, where fromSweep
+// (S^-1 from the sweep's -S^-1), else `result` itself (may be `inverse`); s = 1 where scale
+// is empty.
+template <class ExecutionSpaceT>
+void finishInverse(const ExecutionSpaceT& space, const CoarseDense<ExecutionSpaceT>& result, bool fromSweep,
+                   const CoarseScale<ExecutionSpaceT>& scale, const CoarseDense<ExecutionSpaceT>& inverse) {
+  const LocalIndex n = static_cast<LocalIndex>(result.extent(0));
+  const bool scaled = scale.extent(0) > 0;
+  Kokkos::parallel_for(
+      "perishell::amg::coarse_finish_inverse", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, n),
+      KOKKOS_LAMBDA(const LocalIndex row) {
+        for (LocalIndex column = 0; column < n; ++column) {
+          const double entry =
+              fromSweep ? -(column >= row ? result(row, column) : result(column, row)) : result(row, column);
+          inverse(row, column) = scaled ? scale(row) * scale(column) * entry : entry;  // symmetric bit for bit
+        }
       });
 }
 
@@ -231,6 +303,7 @@ class CoarseInverse {
       inverse_ = dense_type("perishell::amg::coarse_inverse", n, n);
       work_ = dense_type("perishell::amg::coarse_work", n, n);
       scale_ = detail::CoarseScale<ExecutionSpaceT>("perishell::amg::coarse_scale", n);
+      columns_ = dense_type("perishell::amg::coarse_sweep_columns", 2, n);
     }
     detail::scaleToUnitDiagonal(space, A, scale_, work_, inverse_);
     const double norm = detail::frobeniusNorm(space, work_, false);
@@ -240,7 +313,13 @@ class CoarseInverse {
     const bool symmetric = detail::frobeniusNorm(space, work_, true) <= 1e-12 * norm;
     if (symmetric) detail::symmetrize(space, work_);
     const double normOfScaled = detail::oneNorm(space, work_);
-    const detail::EliminationFailure failure = detail::gaussJordan(space, work_, inverse_, !symmetric, failure_);
+    detail::EliminationFailure failure;
+    if (symmetric) {
+      failure = detail::sweepSymmetric(space, work_, columns_, failure_);
+      if (failure.step < 0) detail::finishInverse(space, work_, true, {}, inverse_);
+    } else {
+      failure = detail::gaussJordan(space, work_, inverse_, failure_);
+    }
     double rcond = 0.0;
     if (failure.step < 0) {
       const double normOfInverse = detail::oneNorm(space, inverse_);
@@ -258,8 +337,7 @@ class CoarseInverse {
              "supports";
       throw std::runtime_error(msg.str());
     }
-    if (symmetric) detail::symmetrize(space, inverse_);
-    detail::scaleSymmetrically(space, inverse_, scale_);
+    detail::finishInverse(space, inverse_, false, scale_, inverse_);
   }
 
   // A^-1 (n x n), valid after compute().
@@ -268,7 +346,7 @@ class CoarseInverse {
  private:
   static constexpr const char* who = "perishell::multigrid::SmoothedAggregationPreconditioner";
 
-  dense_type inverse_, work_;
+  dense_type inverse_, work_, columns_;
   detail::CoarseScale<ExecutionSpaceT> scale_;
   detail::EliminationFailureView<ExecutionSpaceT> failure_{"perishell::amg::coarse_failure"};
 };
