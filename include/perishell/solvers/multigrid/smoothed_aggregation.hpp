@@ -18,7 +18,7 @@
 //   omega = 4 / (3 lambda_max(D^-1 A)) (power iterations);
 // - A_{l+1} = P^T A P (sparse_product.hpp: patterns once on the host, values on the device
 //   at every update()).
-// The coarsest matrix (a few hundred DOF) is inverted densely where the hierarchy lives
+// The coarsest matrix (up to ~1200 DOF) is inverted densely where the hierarchy lives
 // (coarse_inverse.hpp) and applied as a dense matrix-vector product: a rebuild on the GPU
 // copies no matrix to the host.
 //
@@ -338,8 +338,9 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
         options.powerIterations < 1 || !(options.chebyshevEigenRatio > 1.0) ||
         !(options.dropTolerance >= 0.0 && options.dropTolerance < 1.0))
       throw std::invalid_argument(std::string(who) +
-                                  ": options need maxCoarseNodes, maxLevels, chebyshevDegree, powerIterations >= 1, "
-                                  "chebyshevEigenRatio > 1 and 0 <= dropTolerance < 1");
+                                  ": options need maxCoarseNodes, smallCoarseNodes, maxLevels, chebyshevDegree, "
+                                  "powerIterations >= 1, denseInverseBudget >= 0, chebyshevEigenRatio > 1 and "
+                                  "0 <= dropTolerance < 1");
     levels_.emplace_back();
     snapshotFineMatrix(A);
     levels_[0].nearNullSpace = near_null_space_type("perishell::amg::near_null_space_0", A.numRows());
