@@ -24,10 +24,12 @@
 #       limit; 0 rebuilds it at every Newton iteration; default 1.5).
 # AMG_COARSE_NODES=N (pressed only) sets the deck's solver.amg-coarse-nodes (the most nodes of
 #       the densely inverted coarsest level; 80 builds the hierarchies of before 2026-12-07).
+# AMG_LOCAL_SCALING=true|false (pressed only) sets the deck's solver.amg-local-scaling (false:
+#       one smoother scaling and prolongator damping per level, as before 2026-12-07).
 # Each run's full log is kept next to the CSV (OUT.csv.ratio-R.log).
 set -euo pipefail
 if [[ $# -lt 3 ]]; then
-  sed -n '2,27p' "$0" >&2
+  sed -n '2,29p' "$0" >&2
   exit 2
 fi
 app=$1 case=$2 csv=$3 limit=${4:-}
@@ -66,6 +68,11 @@ deck_for() {
       if [[ -n ${AMG_COARSE_NODES:-} ]]; then
         sed -i -e "s/^    preconditioner: amg$/    preconditioner: amg\n    amg-coarse-nodes: $AMG_COARSE_NODES/" "$deck"
         grep -q "amg-coarse-nodes: $AMG_COARSE_NODES\$" "$deck" ||
+          { echo "pd_ratio_sweep: $base has no 'preconditioner: amg' line" >&2; exit 1; }
+      fi
+      if [[ -n ${AMG_LOCAL_SCALING:-} ]]; then
+        sed -i -e "s/^    preconditioner: amg$/    preconditioner: amg\n    amg-local-scaling: $AMG_LOCAL_SCALING/" "$deck"
+        grep -q "amg-local-scaling: $AMG_LOCAL_SCALING\$" "$deck" ||
           { echo "pd_ratio_sweep: $base has no 'preconditioner: amg' line" >&2; exit 1; }
       fi
       if [[ -n ${AMG_REUSE:-} ]]; then

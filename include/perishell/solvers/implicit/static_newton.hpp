@@ -133,6 +133,9 @@ struct NewtonOptions {
   double amgDropTolerance = multigrid::SmoothedAggregationOptions{}.dropTolerance;
   // multigrid::SmoothedAggregationOptions::maxCoarseNodes (deck solver.amg-coarse-nodes).
   LocalIndex amgCoarseNodes = multigrid::SmoothedAggregationOptions{}.maxCoarseNodes;
+  // Local scaling of the AMG smoother (deck solver.amg-local-scaling): false sets
+  // multigrid::SmoothedAggregationOptions::localScalingIterations to 0.
+  bool amgLocalScaling = true;
   // Mixed-format Newton (docs/implicit.md): the shell elements' local forces s are carried
   // from iteration to iteration as independent unknowns, s <- K_l (d + B du), and the next
   // tangent's initial-stress term takes them in place of K_l d at the new state. Converged

@@ -579,6 +579,7 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveOnce(const Matrix& K, 
       multigrid::SmoothedAggregationOptions multigridOptions;
       multigridOptions.dropTolerance = options_.amgDropTolerance;
       multigridOptions.maxCoarseNodes = options_.amgCoarseNodes;
+      if (!options_.amgLocalScaling) multigridOptions.localScalingIterations = 0;
       onEveryRank("the multigrid preconditioner", [&] {
         if (multigrid_)
           multigrid_->update(preconditionerMatrix(K), currentPositions_);
