@@ -15,7 +15,7 @@
 //
 // Usage: perishell_perf_implicit_solve [--csv] [--repeats R] [--preconditioner NAME]
 //                                      [--factorization auto|host|device] [--amg-drop-tolerance T]
-//                                      [--amg-coarse-nodes N] [--amg-local-scaling true|false]
+//                                      [--amg-coarse-nodes N] [--amg-region-scaling true|false]
 //                                      [--models ccm,pd,pd50] [--newton N] [spacing_mm...]
 //   models: ccm, pd (100 %) or pdNN (NN % PD, the zone grown from the clamped edge's middle);
 //   defaults: 5 repeats, preconditioner amg, models ccm and pd, spacings 0.5 0.25 0.1 mm; with
@@ -44,7 +44,7 @@ struct Options {
   std::string factorization = "auto";  // solver.factorization: where a GPU run factors
   std::string amgDropTolerance = "0.05";  // solver.amg-drop-tolerance
   std::string amgCoarseNodes = "200";     // solver.amg-coarse-nodes
-  std::string amgLocalScaling = "true";   // solver.amg-local-scaling
+  std::string amgRegionScaling = "true";   // solver.amg-region-scaling
   std::vector<std::string> models{"ccm", "pd"};
   std::vector<double> spacingsMm{0.5, 0.25, 0.1};
   int newtonIterations = 0;  // 0: the whole first increment
@@ -62,7 +62,7 @@ int pdRatioPercent(const std::string& model) {
   std::fprintf(stderr,
                "error: %s\nusage: %s [--csv] [--repeats R] [--preconditioner jacobi|block-jacobi|amg|cholesky|direct|auto] "
                "[--factorization auto|host|device] [--amg-drop-tolerance T] [--amg-coarse-nodes N] [--models ccm,pd,pd50] "
-               "[--amg-local-scaling true|false] [--newton N] "
+               "[--amg-region-scaling true|false] [--newton N] "
                "[spacing_mm...]\n",
                problem.c_str(), program);
   std::exit(2);
@@ -89,8 +89,8 @@ Options parseArguments(int argc, char* argv[]) {
       options.amgDropTolerance = argv[++a];
     } else if (argument == "--amg-coarse-nodes" && hasValue) {
       options.amgCoarseNodes = argv[++a];
-    } else if (argument == "--amg-local-scaling" && hasValue) {
-      options.amgLocalScaling = argv[++a];
+    } else if (argument == "--amg-region-scaling" && hasValue) {
+      options.amgRegionScaling = argv[++a];
     } else if (argument == "--models" && hasValue) {
       options.models.clear();
       std::string list = argv[++a];
@@ -135,7 +135,7 @@ perishell::model::Model pressedPlate(double spacing, const std::string& zone, co
                            ", factorization: " + options.factorization +
                            ", amg-drop-tolerance: " + options.amgDropTolerance +
                            ", amg-coarse-nodes: " + options.amgCoarseNodes +
-                           ", amg-local-scaling: " + options.amgLocalScaling + R"(}
+                           ", amg-region-scaling: " + options.amgRegionScaling + R"(}
 )";
   return perishell::model::buildModel(perishell::parseDeck(text, "pressed_plate.yaml"));
 }
@@ -160,13 +160,13 @@ int main(int argc, char* argv[]) {
   } else {
     std::printf("# implicit pressed plate 4.2.1 on %s (concurrency %d), first increment (1 %% of 1 MPa)%s, "
                 "assembly median of %d, %s preconditioner, amg-drop-tolerance %s, amg-coarse-nodes %s, "
-                "amg-local-scaling %s\n",
+                "amg-region-scaling %s\n",
                 ExecutionSpace::name(), ExecutionSpace::concurrency(),
                 options.newtonIterations > 0 ? (", its first " + std::to_string(options.newtonIterations) +
                                                 " Newton iterations").c_str()
                                              : "",
                 options.repeats, options.preconditioner.c_str(), options.amgDropTolerance.c_str(),
-                options.amgCoarseNodes.c_str(), options.amgLocalScaling.c_str());
+                options.amgCoarseNodes.c_str(), options.amgRegionScaling.c_str());
     std::printf("%5s %8s %9s %9s %10s %10s %10s %12s %7s %9s %10s %10s %12s %10s\n", "model", "dx[mm]", "nodes",
                 "elements", "paper DOF", "free DOF", "bonds", "assembly[s]", "Newton", "PCG/solve", "setup[s]",
                 "solve[s]", "tip w [m]", "paper [s]");

@@ -24,7 +24,7 @@
 #       limit; 0 rebuilds it at every Newton iteration; default 1.5).
 # AMG_COARSE_NODES=N (pressed only) sets the deck's solver.amg-coarse-nodes (the most nodes of
 #       the densely inverted coarsest level; 80 builds the hierarchies of before 2026-12-07).
-# AMG_LOCAL_SCALING=true|false (pressed only) sets the deck's solver.amg-local-scaling (false:
+# AMG_REGION_SCALING=true|false (pressed only) sets the deck's solver.amg-region-scaling (false:
 #       one smoother scaling and prolongator damping per level, as before 2026-12-07).
 # Each run's full log is kept next to the CSV (OUT.csv.ratio-R.log).
 set -euo pipefail
@@ -70,9 +70,9 @@ deck_for() {
         grep -q "amg-coarse-nodes: $AMG_COARSE_NODES\$" "$deck" ||
           { echo "pd_ratio_sweep: $base has no 'preconditioner: amg' line" >&2; exit 1; }
       fi
-      if [[ -n ${AMG_LOCAL_SCALING:-} ]]; then
-        sed -i -e "s/^    preconditioner: amg$/    preconditioner: amg\n    amg-local-scaling: $AMG_LOCAL_SCALING/" "$deck"
-        grep -q "amg-local-scaling: $AMG_LOCAL_SCALING\$" "$deck" ||
+      if [[ -n ${AMG_REGION_SCALING:-} ]]; then
+        sed -i -e "s/^    preconditioner: amg$/    preconditioner: amg\n    amg-region-scaling: $AMG_REGION_SCALING/" "$deck"
+        grep -q "amg-region-scaling: $AMG_REGION_SCALING\$" "$deck" ||
           { echo "pd_ratio_sweep: $base has no 'preconditioner: amg' line" >&2; exit 1; }
       fi
       if [[ -n ${AMG_REUSE:-} ]]; then

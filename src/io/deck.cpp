@@ -703,7 +703,7 @@ deck::Solver readSolver(const Section& section) {
                                               "damping", "shell-element", "hourglass"};
   const std::vector<std::string> implicitKeys{"type", "increments", "max-iterations", "tolerance",
                                               "preconditioner", "max-cuts", "tangent", "amg-reuse",
-                                              "amg-drop-tolerance", "amg-coarse-nodes", "amg-local-scaling",
+                                              "amg-drop-tolerance", "amg-coarse-nodes", "amg-region-scaling",
                                               "line-search", "control", "max-increments", "newton", "factorization"};
   std::vector<std::string> allKeys = explicitKeys;
   allKeys.insert(allKeys.end(), implicitKeys.begin() + 1, implicitKeys.end());
@@ -802,7 +802,7 @@ deck::Solver readSolver(const Section& section) {
       section.fail("amg-coarse-nodes", "must be a whole number in [1, 2000] (nodes of the densely inverted coarsest "
                                        "level), got " + std::to_string(coarseNodes));
     settings.amgCoarseNodes = static_cast<int>(coarseNodes);
-    settings.amgLocalScaling = section.flag("amg-local-scaling", settings.amgLocalScaling);
+    settings.amgRegionScaling = section.flag("amg-region-scaling", settings.amgRegionScaling);
   }
   return solver;
 }

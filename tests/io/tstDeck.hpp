@@ -283,7 +283,7 @@ perishell:
     amg-reuse: 2.0
     amg-drop-tolerance: 0.1
     amg-coarse-nodes: 120
-    amg-local-scaling: false
+    amg-region-scaling: false
     newton: displacement
     factorization: host
   output:
@@ -363,7 +363,7 @@ perishell:
   EXPECT_DOUBLE_EQ(deck.solver.implicitSettings.amgReuse, 2.0);
   EXPECT_DOUBLE_EQ(deck.solver.implicitSettings.amgDropTolerance, 0.1);
   EXPECT_EQ(deck.solver.implicitSettings.amgCoarseNodes, 120);
-  EXPECT_FALSE(deck.solver.implicitSettings.amgLocalScaling);
+  EXPECT_FALSE(deck.solver.implicitSettings.amgRegionScaling);
   EXPECT_EQ(deck.solver.implicitSettings.newton, deck::ImplicitSettings::Newton::Displacement);
   EXPECT_EQ(deck.solver.implicitSettings.factorization, deck::Factorization::Host);
 
@@ -423,7 +423,7 @@ TEST(TEST_CATEGORY, deck_defaults_fill_what_a_minimal_deck_leaves_out) {
   EXPECT_DOUBLE_EQ(implicitSettings.amgReuse, 1.5);
   EXPECT_DOUBLE_EQ(implicitSettings.amgDropTolerance, 0.05);
   EXPECT_EQ(implicitSettings.amgCoarseNodes, 200);
-  EXPECT_TRUE(implicitSettings.amgLocalScaling);
+  EXPECT_TRUE(implicitSettings.amgRegionScaling);
   EXPECT_EQ(implicitSettings.newton, deck::ImplicitSettings::Newton::Mixed);
   EXPECT_TRUE(implicitDeck.warnings.empty());
 }
@@ -619,8 +619,8 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
        "solver.amg-drop-tolerance", {"must be in [0, 1) (0 aggregates over every coupling), got 1"}},
       {"amg coarse nodes of 0", {{"    increments: 10\n", "    increments: 10\n    amg-coarse-nodes: 0\n"}},
        "solver.amg-coarse-nodes", {"must be a whole number in [1, 2000]", "got 0"}},
-      {"amg local scaling not a flag", {{"    increments: 10\n", "    increments: 10\n    amg-local-scaling: 20\n"}},
-       "solver.amg-local-scaling", {"expected true or false"}},
+      {"amg local scaling not a flag", {{"    increments: 10\n", "    increments: 10\n    amg-region-scaling: 20\n"}},
+       "solver.amg-region-scaling", {"expected true or false"}},
       {"unknown generator", {{"generator: plate", "generator: disc"}}, "mesh.generator",
        {"'disc' is not one of plate, cylinder, hexagonal-prism, gmsh"}},
       {"unsupported version", {{"version: 1", "version: 2"}}, "version", {"unsupported deck version 2"}},

@@ -212,9 +212,9 @@ struct ImplicitSettings {
   // The most nodes of the AMG's densely inverted coarsest level
   // (multigrid::SmoothedAggregationOptions::maxCoarseNodes).
   int amgCoarseNodes = 200;
-  // Whether the AMG smoother and prolongator scale each node by its local spectrum
-  // (multigrid::SmoothedAggregationOptions::localScalingIterations > 0).
-  bool amgLocalScaling = true;
+  // Whether the AMG smoother and prolongator scale each region (PD, shell, both) by its own
+  // spectrum (multigrid::SmoothedAggregationOptions::regionScaling).
+  bool amgRegionScaling = true;
   bool lineSearch = false;  // solvers::NewtonOptions::lineSearch
   // Mixed: the shell elements' local forces are Newton unknowns of their own
   // (solvers::NewtonOptions::mixedFormat); Displacement: the classical Newton.

@@ -93,6 +93,7 @@ StaticNewtonSolver<ExecutionSpaceT>::StaticNewtonSolver(const ExecutionSpaceT& s
                                               actions_.mirrorImages.empty() ? assembly::SelfBonds::Refused
                                                                             : assembly::SelfBonds::Allowed);
   values_ = VectorView<Memory>("perishell::newton::tangentValues", pattern_.columns.extent(0));
+  nodeRegions_ = nodeRegions(space_, numNodes, quads, bondNodes);
   if (distribution_.distributed()) {
     Kokkos::deep_copy(space_, ownedNodes_, distribution_.owned());
     auto rows = std::make_shared<belos::DistributedRows<Memory>>();
@@ -579,13 +580,13 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveOnce(const Matrix& K, 
       multigrid::SmoothedAggregationOptions multigridOptions;
       multigridOptions.dropTolerance = options_.amgDropTolerance;
       multigridOptions.maxCoarseNodes = options_.amgCoarseNodes;
-      if (!options_.amgLocalScaling) multigridOptions.localScalingIterations = 0;
+      multigridOptions.regionScaling = options_.amgRegionScaling;
       onEveryRank("the multigrid preconditioner", [&] {
         if (multigrid_)
           multigrid_->update(preconditionerMatrix(K), currentPositions_);
         else
           multigrid_ = std::make_shared<multigrid::SmoothedAggregationPreconditioner<ExecutionSpaceT>>(
-              space_, preconditionerMatrix(K), currentPositions_, multigridOptions);
+              space_, preconditionerMatrix(K), currentPositions_, multigridOptions, nodeRegions_);
       });
     } else {
       limited.maxIterations = std::min(linear.maxIterations, reuseIterationLimit());

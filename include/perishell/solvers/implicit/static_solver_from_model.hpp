@@ -31,9 +31,8 @@ static_assert(deck::ImplicitSettings{}.amgDropTolerance == multigrid::SmoothedAg
               "the deck's default solver.amg-drop-tolerance is the multigrid's default");
 static_assert(deck::ImplicitSettings{}.amgCoarseNodes == multigrid::SmoothedAggregationOptions{}.maxCoarseNodes,
               "the deck's default solver.amg-coarse-nodes is the multigrid's default");
-static_assert(deck::ImplicitSettings{}.amgLocalScaling ==
-                  (multigrid::SmoothedAggregationOptions{}.localScalingIterations > 0),
-              "the deck's default solver.amg-local-scaling is the multigrid's default");
+static_assert(deck::ImplicitSettings{}.amgRegionScaling == multigrid::SmoothedAggregationOptions{}.regionScaling,
+              "the deck's default solver.amg-region-scaling is the multigrid's default");
 
 // The deck's Newton settings; momentsApplied: whether any load has a moment component (on any rank).
 inline NewtonOptions newtonOptions(const model::Model& model, bool momentsApplied) {
@@ -48,7 +47,7 @@ inline NewtonOptions newtonOptions(const model::Model& model, bool momentsApplie
   options.amgReuseGrowth = settings.amgReuse;
   options.amgDropTolerance = settings.amgDropTolerance;
   options.amgCoarseNodes = settings.amgCoarseNodes;
-  options.amgLocalScaling = settings.amgLocalScaling;
+  options.amgRegionScaling = settings.amgRegionScaling;
   options.preconditioner = settings.preconditioner;
   options.factorization = settings.factorization;
   options.tangent = settings.tangent == deck::Tangent::Exact || (settings.tangent == deck::Tangent::Auto && momentsApplied)

@@ -14,11 +14,13 @@
 // - the tentative prolongator P_tent is B_l orthonormalised per aggregate (thin QR, one
 //   thread per aggregate), and R of that QR is the next level's near-null space, so
 //   P_tent B_{l+1} = B_l and coarse nodes carry 6 DOF again;
-// - P = (I - omega M^-1 A) P_tent with M = diag(lambda_i) D, D the 6x6 nodal block diagonal,
-//   lambda_i a local estimate of lambda_max(D^-1 A) around node i (localSpectralRadii), and
-//   omega = 4 / (3 lambda_max(M^-1 A)) (power iterations): each region of a model that mixes
-//   stiffnesses of different spectra (PD bonds and shell elements) is damped and smoothed by
-//   its own spectrum, not the stiffest region's;
+// - P = (I - omega M^-1 A) P_tent with M = diag(lambda_r(i)) D, D the 6x6 nodal block
+//   diagonal, lambda_r = lambda_max(D^-1 A) on the nodes of region r alone (the caller's
+//   regions: PD nodes and shell-only nodes; a coarse node, an aggregate, is in the union of
+//   its members' regions; regionSpectralRadii), and omega = 4 / (3 lambda_max(M^-1 A)) (power
+//   iterations): each region of a model that mixes stiffnesses of different spectra (PD
+//   bonds and shell elements) is damped and smoothed by its own spectrum, not the stiffest
+//   region's. A model of one region gets M = lambda D, the same hierarchy as with D;
 // - A_{l+1} = P^T A P (sparse_product.hpp: patterns once on the host, values on the device
 //   at every update()).
 // The coarsest matrix (up to ~1200 DOF) is inverted densely where the hierarchy lives
@@ -48,6 +50,7 @@
 #include <KokkosSparse_spmv.hpp>
 #include <Kokkos_Core.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -87,24 +90,19 @@ struct SmoothedAggregationOptions {
   // dx 0.5 mm, from 216 to 125 and 301 to 128 at 0.25 mm; CCM-only stayed at 40 and 39
   // (docs/implicit.md, "Strength of connection"). 0 aggregates over every stored block.
   double dropTolerance = 0.05;
-  // Local scaling of the smoother's diagonal, M = diag(lambda_i) D (localSpectralRadii):
-  // lambda_i from this many local power iterations (0: M = D, one damping for the whole
-  // level), then the largest over the node's neighbours within localScalingRings couplings.
-  // In a mixed model lambda_max(D^-1 A) is the shell region's (2.40 on the pressed plate
-  // 4.2.1, against 1.54 for PD alone), which damped and smoothed the PD region with about
-  // 0.64 of its own omega; scaled locally, the first increment's PCG iterations per solve at
-  // 25 / 50 / 75 % PD fell from 57 / 66 / 63 to 45-48 / 50-53 / 50-51, below 100 % PD's 55
-  // (docs/implicit.md, "Local scaling"). Taken over fewer rings, the estimates at the
-  // region borders were too low and the simply supported mixed plates lost up to 6 %.
-  int localScalingIterations = 20;
-  int localScalingRings = 3;
+  // Scaling of the smoother's diagonal by region, M = diag(lambda_r(i)) D
+  // (regionSpectralRadii); false: M = D, one damping for the whole level. In a mixed model
+  // lambda_max(D^-1 A) is the shell region's (2.40 on the pressed plate 4.2.1, against 1.54
+  // for PD alone), which damped and smoothed the PD region with about 0.64 of its own omega
+  // (docs/implicit.md, "Scaling by region").
+  bool regionScaling = true;
 };
 
 // Seconds of each part of the set-up, the construction and every update() together, each
 // part fenced: where a rebuild's time goes (perf/implicit_solve.cpp prints them).
 struct SmoothedAggregationSetupSeconds {
   double patterns = 0.0;     // aggregation and product patterns (host, at construction)
-  double smoother = 0.0;     // fine-matrix copy, rigid-body modes, block inverses, local scaling, M^-1 A, lambda_max
+  double smoother = 0.0;     // fine-matrix copy, rigid-body modes, block inverses, M by region, lambda_max
   double prolongator = 0.0;  // QR of the near-null space, M^-1 A P_tent, smoothing, P^T
   double galerkin = 0.0;     // A P and P^T (A P)
   double coarse = 0.0;       // the coarsest level's dense inverse
@@ -275,70 +273,47 @@ double largestEigenvalue(const ExecutionSpaceT& space, const Matrix<ExecutionSpa
   return lambda;
 }
 
-// The smallest local estimate kept, as a fraction of the largest: a node's lambda_i can come
-// out near zero where D^-1 A is not symmetric (the exact tangent's) or x happened to vanish,
-// and 1 / lambda_i would then dominate lambda_max(M^-1 A) and under-smooth every other node.
-constexpr double smallestLocalRadius = 0.25;
-
-// lambda_i, a local estimate of lambda_max(D^-1 A) around node i (SmoothedAggregationOptions::
-// localScalingIterations): power iterations x <- D^-1 A x in which each node's 6-vector is
-// renormalised in its own energy norm |x_i|_D = sqrt(x_i . D_i x_i), so that every region
-// converges to its own largest mode; lambda_i is the growth of |x_i|_D in the last step
-// (|y_i|_D^2 = y_i . t_i for t = A x, y_i = D_i^-1 t_i: D itself is not needed), then the
-// largest over the node's neighbours within `rings` couplings, and at least
-// smallestLocalRadius of the largest lambda_i. x and t are work vectors of A's rows, radius
-// and work per node.
+// A node's regions as bit flags (SmoothedAggregationPreconditioner's `regions`): a coarse
+// node carries the union (bitwise or) of its aggregate's members.
+constexpr int regionCount = 4;  // two flags
 template <class ExecutionSpaceT>
-void localSpectralRadii(const ExecutionSpaceT& space, const Matrix<ExecutionSpaceT>& A,
-                        const belos::detail::BlockInverseView<ExecutionSpaceT>& inverses, int iterations, int rings,
-                        const Vector<ExecutionSpaceT>& x, const Vector<ExecutionSpaceT>& t,
-                        const Vector<ExecutionSpaceT>& radius, const Vector<ExecutionSpaceT>& work) {
-  const LocalIndex numNodes = A.numRows() / dofPerNode;
+using RegionView = Kokkos::View<const int*, DeviceOf<ExecutionSpaceT>>;
+
+// lambda_r = lambda_max(D_rr^-1 A_rr) of every region r, A_rr the rows and columns of its
+// nodes, by power iterations run side by side from pseudoRandomStart with the couplings
+// between regions left out; radius(node) = lambda of the node's region. scaled: D^-1 A; x and
+// y: work vectors of its rows; squaredNorms: regionCount entries. Nothing goes to the host.
+template <class ExecutionSpaceT>
+void regionSpectralRadii(const ExecutionSpaceT& space, const Matrix<ExecutionSpaceT>& scaled,
+                         const RegionView<ExecutionSpaceT>& regions, int iterations, const Vector<ExecutionSpaceT>& x,
+                         const Vector<ExecutionSpaceT>& y, const Vector<ExecutionSpaceT>& squaredNorms,
+                         const Vector<ExecutionSpaceT>& radius) {
+  const auto rowMap = scaled.graph.row_map;
+  const auto entries = scaled.graph.entries;
+  const auto values = scaled.values;
   pseudoRandomStart(space, x);
   for (int k = 0; k < iterations; ++k) {
-    KokkosSparse::spmv("N", 1.0, A, x, 0.0, t);
+    Kokkos::deep_copy(space, squaredNorms, 0.0);
     Kokkos::parallel_for(
-        "perishell::amg::local_power_step", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numNodes),
-        KOKKOS_LAMBDA(const LocalIndex node) {
-          const LocalIndex first = dofPerNode * node;
-          double y[dofPerNode], energy = 0.0;
-          for (int a = 0; a < dofPerNode; ++a) {
-            y[a] = 0.0;
-            for (int b = 0; b < dofPerNode; ++b) y[a] += inverses(node, a, b) * t(first + b);
-            energy += y[a] * t(first + a);
-          }
-          const double norm = energy > 0.0 ? Kokkos::Experimental::sqrt(energy) : 0.0;
-          radius(node) = norm;  // |x_i|_D = 1 from the second iteration on
-          for (int a = 0; a < dofPerNode; ++a) x(first + a) = norm > 0.0 ? y[a] / norm : 0.0;
+        "perishell::amg::region_power_product", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, scaled.numRows()),
+        KOKKOS_LAMBDA(const LocalIndex row) {
+          const int region = regions(row / dofPerNode);
+          double sum = 0.0;
+          for (RowOffset e = rowMap(row); e < rowMap(row + 1); ++e)
+            if (regions(entries(e) / dofPerNode) == region) sum += values(e) * x(entries(e));
+          y(row) = sum;
+          Kokkos::atomic_add(&squaredNorms(region), sum * sum);
+        });
+    Kokkos::parallel_for(
+        "perishell::amg::region_power_normalise", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, scaled.numRows()),
+        KOKKOS_LAMBDA(const LocalIndex row) {
+          const double squared = squaredNorms(regions(row / dofPerNode));
+          x(row) = squared > 0.0 ? y(row) / Kokkos::Experimental::sqrt(squared) : 0.0;
         });
   }
-  const auto rowMap = A.graph.row_map;
-  const auto entries = A.graph.entries;
-  auto from = radius, to = work;
-  for (int ring = 0; ring < rings; ++ring) {
-    Kokkos::parallel_for(
-        "perishell::amg::local_radius_ring", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numNodes),
-        KOKKOS_LAMBDA(const LocalIndex node) {
-          const LocalIndex row = dofPerNode * node;  // a node's rows share their columns
-          double largest = from(node);
-          for (RowOffset k = rowMap(row); k < rowMap(row + 1); ++k) {
-            const double neighbour = from(entries(k) / dofPerNode);
-            if (neighbour > largest) largest = neighbour;
-          }
-          to(node) = largest;
-        });
-    std::swap(from, to);
-  }
-  if (from.data() != radius.data()) Kokkos::deep_copy(space, radius, from);
-  double largest = 0.0;
-  Kokkos::parallel_reduce(
-      "perishell::amg::largest_local_radius", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numNodes),
-      KOKKOS_LAMBDA(const LocalIndex node, double& partial) { if (radius(node) > partial) partial = radius(node); },
-      Kokkos::Max<double>(largest));
-  const double smallest = smallestLocalRadius * largest;
   Kokkos::parallel_for(
-      "perishell::amg::floor_local_radius", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, numNodes),
-      KOKKOS_LAMBDA(const LocalIndex node) { if (radius(node) < smallest) radius(node) = smallest; });
+      "perishell::amg::region_radius", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, radius.extent(0)),
+      KOKKOS_LAMBDA(const LocalIndex node) { radius(node) = Kokkos::Experimental::sqrt(squaredNorms(regions(node))); });
 }
 
 // D_i^-1 -> (lambda_i D_i)^-1: the block inverses become M's.
@@ -348,7 +323,7 @@ void scaleBlockInverses(const ExecutionSpaceT& space, const belos::detail::Block
   Kokkos::parallel_for(
       "perishell::amg::scale_block_inverses", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, radius.extent(0)),
       KOKKOS_LAMBDA(const LocalIndex node) {
-        const double scale = 1.0 / radius(node);
+        const double scale = radius(node) > 0.0 ? 1.0 / radius(node) : 1.0;
         for (int a = 0; a < dofPerNode; ++a)
           for (int b = 0; b < dofPerNode; ++b) inverses(node, a, b) *= scale;
       });
@@ -426,26 +401,32 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
   // A: symmetric for CG (non-symmetric, e.g. the exact tangent, for GMRES: then the V-cycle
   // is not symmetric either, and only Apply without transpose is meaningful), 6 DOF per node in consecutive rows, rows sorted, the rows of one node
   // sharing one column pattern (the NodalBlockPattern layout); supports eliminated.
-  // positions: the nodes' current coordinates [m]. Builds the hierarchy (aggregation and
-  // product patterns on the host once, numeric parts on the device, again at update()).
-  // Throws std::invalid_argument for bad shapes, std::runtime_error for a singular nodal
-  // block or a singular coarse problem (a model free to move as a rigid body).
+  // positions: the nodes' current coordinates [m]. regions: per node, bit flags below
+  // detail::regionCount naming its part of the model (static Newton's nodeRegions: 1 PD,
+  // 2 shell elements only), or empty for one region; fixed with the pattern. Builds the
+  // hierarchy (aggregation and product patterns on the host once, numeric parts on the device,
+  // again at update()). Throws std::invalid_argument for bad shapes, std::runtime_error for a singular
+  // nodal block or a singular coarse problem (a model free to move as a rigid body).
   SmoothedAggregationPreconditioner(const ExecutionSpaceT& space, const matrix_type& A, const positions_type& positions,
-                                    const SmoothedAggregationOptions& options = {})
+                                    const SmoothedAggregationOptions& options = {},
+                                    const detail::RegionView<ExecutionSpaceT>& regions = {})
       : space_(space), options_(options) {
     const auto start = std::chrono::steady_clock::now();
     checkInput(A, positions);
+    if (regions.extent(0) != 0 && regions.extent(0) != positions.extent(0))
+      throw std::invalid_argument(std::string(who) + ": " + std::to_string(regions.extent(0)) +
+                                  " node regions for " + std::to_string(positions.extent(0)) + " nodes");
     if (options.maxCoarseNodes < 1 || options.smallCoarseNodes < 1 || !(options.denseInverseBudget >= 0.0) ||
         options.maxLevels < 1 || options.chebyshevDegree < 1 ||
         options.powerIterations < 1 || !(options.chebyshevEigenRatio > 1.0) ||
-        !(options.dropTolerance >= 0.0 && options.dropTolerance < 1.0) || options.localScalingIterations == 1 ||
-        options.localScalingIterations < 0 || options.localScalingRings < 0)
+        !(options.dropTolerance >= 0.0 && options.dropTolerance < 1.0))
       throw std::invalid_argument(std::string(who) +
                                   ": options need maxCoarseNodes, smallCoarseNodes, maxLevels, chebyshevDegree, "
-                                  "powerIterations >= 1, denseInverseBudget >= 0, chebyshevEigenRatio > 1, "
-                                  "0 <= dropTolerance < 1, localScalingIterations 0 or >= 2 and "
-                                  "localScalingRings >= 0");
+                                  "powerIterations >= 1, denseInverseBudget >= 0, chebyshevEigenRatio > 1 and "
+                                  "0 <= dropTolerance < 1");
     levels_.emplace_back();
+    setRegions(0, regions.extent(0) != 0 ? hostCopy(regions)
+                                         : std::vector<int>(positions.extent(0), 0));
     snapshotFineMatrix(A);
     levels_[0].nearNullSpace = near_null_space_type("perishell::amg::near_null_space_0", A.numRows());
     detail::rigidBodyModes(space_, A, positions, levels_[0].nearNullSpace);
@@ -514,7 +495,12 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     // Smoother and transfer to the next level (absent on the coarsest level).
     belos::detail::BlockInverseView<ExecutionSpaceT> blockInverses;
     matrix_type scaledA;  // M^-1 A
-    vector_type localRadius, localRadiusWork;  // lambda_i of M = diag(lambda_i) D, per node
+    // Each node's regions (bit flags), how many distinct ones the level has, and lambda_r of
+    // M = diag(lambda_r) D per node.
+    Kokkos::View<int*, detail::DeviceOf<ExecutionSpaceT>> regions;
+    std::vector<int> hostRegions;
+    int numRegions = 1;
+    vector_type regionRadius, regionSquaredNorms;
     double lambdaMax = 0.0;
     Kokkos::View<RowOffset*, detail::DeviceOf<ExecutionSpaceT>> aggregateOffsets;
     Kokkos::View<LocalIndex*, detail::DeviceOf<ExecutionSpaceT>> aggregateMembers, aggregateOf;
@@ -574,10 +560,14 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
                                                                                 numRows / dofPerNode);
       level.r = vector_type("perishell::amg::r_" + tag, numRows);
       level.w = vector_type("perishell::amg::w_" + tag, numRows);
-      level.localRadius = vector_type("perishell::amg::local_radius_" + tag, numRows / dofPerNode);
-      level.localRadiusWork = vector_type("perishell::amg::local_radius_work_" + tag, numRows / dofPerNode);
+      level.regionRadius = vector_type("perishell::amg::region_radius_" + tag, numRows / dofPerNode);
+      level.regionSquaredNorms = vector_type("perishell::amg::region_squared_norms_" + tag, detail::regionCount);
     }
     levels_.emplace_back();
+    std::vector<int> coarseRegions(aggregates.numAggregates, 0);
+    for (std::size_t node = 0; node < aggregates.aggregateOf.size(); ++node)
+      coarseRegions[aggregates.aggregateOf[node]] |= levels_[l].hostRegions[node];
+    setRegions(l + 1, std::move(coarseRegions));
     const std::string nextTag = std::to_string(l + 1);
     levels_[l + 1].nearNullSpace = near_null_space_type("perishell::amg::near_null_space_" + nextTag, numCoarseRows);
     levels_[l + 1].x = vector_type("perishell::amg::x_" + nextTag, numCoarseRows);
@@ -605,6 +595,25 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
       fineValues_ = typename matrix_type::values_type::non_const_type("perishell::amg::a_0 values", A.values.extent(0));
     Kokkos::deep_copy(space_, fineValues_, A.values);
     levels_[0].A = matrix_type("perishell::amg::a_0", A.numCols(), fineValues_, A.graph);
+  }
+
+  static std::vector<int> hostCopy(const detail::RegionView<ExecutionSpaceT>& device) {
+    const auto host = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), device);
+    return std::vector<int>(host.data(), host.data() + host.extent(0));
+  }
+
+  void setRegions(std::size_t l, std::vector<int> regions) {
+    Level& level = levels_[l];
+    for (const int region : regions)
+      if (region < 0 || region >= detail::regionCount)
+        throw std::invalid_argument(std::string(who) + ": a node region of " + std::to_string(region) +
+                                    " (regions are bit flags below " + std::to_string(detail::regionCount) + ")");
+    std::vector<bool> present(detail::regionCount, false);
+    for (const int region : regions) present[region] = true;
+    level.numRegions = static_cast<int>(std::count(present.begin(), present.end(), true));
+    level.regions = decltype(level.regions)("perishell::amg::regions_" + std::to_string(l), regions.size());
+    copyToDevice(regions, level.regions);
+    level.hostRegions = std::move(regions);
   }
 
   template <class T, class DeviceView>
@@ -637,13 +646,14 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     if (failed >= 0)
       belos::detail::throwFailedBlock<ExecutionSpaceT>(std::string(who) + " (level " + std::to_string(l) + ")", failed,
                                                        dofPerNode, level.blockDiagnoses);
-    if (options_.localScalingIterations > 0) {
-      detail::localSpectralRadii(space_, level.A, level.blockInverses, options_.localScalingIterations,
-                                 options_.localScalingRings, level.w, level.r, level.localRadius,
-                                 level.localRadiusWork);
-      detail::scaleBlockInverses(space_, level.blockInverses, level.localRadius);
-    }
     detail::scaleByBlockInverse(space_, level.blockInverses, level.A, level.scaledA.values);
+    if (options_.regionScaling && level.numRegions > 1) {
+      detail::regionSpectralRadii(space_, level.scaledA, detail::RegionView<ExecutionSpaceT>(level.regions),
+                                  options_.powerIterations, level.w, level.r, level.regionSquaredNorms,
+                                  level.regionRadius);
+      detail::scaleBlockInverses(space_, level.blockInverses, level.regionRadius);
+      detail::scaleByBlockInverse(space_, level.blockInverses, level.A, level.scaledA.values);
+    }
     space_.fence();
     level.lambdaMax = detail::largestEigenvalue(space_, level.scaledA, options_.powerIterations, level.w, level.r);
     if (!(level.lambdaMax > 0.0) || !std::isfinite(level.lambdaMax))
