@@ -212,8 +212,8 @@ struct ImplicitSettings {
   // The most nodes of the AMG's densely inverted coarsest level
   // (multigrid::SmoothedAggregationOptions::maxCoarseNodes).
   int amgCoarseNodes = 200;
-  // Whether the AMG smoother and prolongator scale each region (PD, shell, both) by its own
-  // spectrum (multigrid::SmoothedAggregationOptions::regionScaling).
+  // Whether the AMG smoother and prolongator scale the PD nodes and the shell-only nodes each
+  // by their own spectrum (multigrid::SmoothedAggregationOptions::regionScaling).
   bool amgRegionScaling = true;
   bool lineSearch = false;  // solvers::NewtonOptions::lineSearch
   // Mixed: the shell elements' local forces are Newton unknowns of their own

@@ -53,7 +53,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
