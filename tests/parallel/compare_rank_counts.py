@@ -13,13 +13,17 @@ within TOL of the column's or dataset's largest magnitude; the solver's counters
 Krylov iterations, cuts, residual) are not compared, and the Krylov iterations are printed for
 each rank count.
 
+--max-krylov-growth G (implicit): the Krylov iterations over the run on any rank count may be
+at most G times the first rank count's; the coarse space over the ranks is what keeps them
+there (docs/parallel.md, "A coarse space over the ranks").
+
 --restart-at N: checkpoints across rank counts. Each rank count also runs the deck's first N
 steps (increments), which ends in a checkpoint, and the next rank count in the list (the last
 the first) continues it with --restart: the continued run's files are compared with the first
 rank count's uninterrupted run as above (bit for bit, or within TOL).
 
 usage: compare_rank_counts.py --app PERISHELL --mpirun MPIRUN --deck DECK --work DIR [--ranks 1,2,3]
-                              [--relative-tolerance TOL] [--restart-at N]
+                              [--relative-tolerance TOL] [--max-krylov-growth G] [--restart-at N]
        compare_rank_counts.py --compare-only --deck DECK --work DIR [...]: compares the
                               directories DIR/ranks-N another machine wrote (a GPU run).
 """
@@ -68,6 +72,7 @@ def main():
     parser.add_argument("--work", required=True)
     parser.add_argument("--ranks", default="1,2,3")
     parser.add_argument("--relative-tolerance", type=float, default=None)
+    parser.add_argument("--max-krylov-growth", type=float, default=None)
     parser.add_argument("--restart-at", type=int, default=None)
     args = parser.parse_args()
     counts = [int(r) for r in args.ranks.split(",")]
@@ -212,6 +217,11 @@ def compare_within(args, counts, outputs):
         print(f"{ranks} ranks: largest relative difference from {counts[0]} rank(s): history {worst[1]:.2e} "
               f"({worst[0]}), fields {worstField[1]:.2e} ({worstField[0]})")
     print("Krylov iterations over the run: " + ", ".join(f"{r} rank(s) {k}" for r, k in krylov.items()))
+    if args.max_krylov_growth is not None:
+        for ranks, count in krylov.items():
+            if not count <= args.max_krylov_growth * krylov[counts[0]]:
+                failures.append(f"{ranks} ranks: {count} Krylov iterations, more than {args.max_krylov_growth:g} x "
+                                f"the {krylov[counts[0]]} on {counts[0]} rank(s)")
     if failures:
         sys.exit("FAIL:\n  " + "\n  ".join(failures))
     print(f"PASS: {args.deck} gives the same answers within {args.relative_tolerance:g} on {args.ranks} ranks"

@@ -215,6 +215,9 @@ struct ImplicitSettings {
   // Whether the AMG smoother and prolongator scale the PD nodes and the shell-only nodes each
   // by their own spectrum (multigrid::SmoothedAggregationOptions::regionScaling).
   bool amgRegionScaling = true;
+  // Whether a distributed run couples its ranks' preconditioners through a coarse space of
+  // each rank's rigid-body modes (solvers::NewtonOptions::coarseSpace).
+  bool coarseSpace = true;
   bool lineSearch = false;  // solvers::NewtonOptions::lineSearch
   // Mixed: the shell elements' local forces are Newton unknowns of their own
   // (solvers::NewtonOptions::mixedFormat); Displacement: the classical Newton.

@@ -32,6 +32,11 @@ class NodeDistribution {
     sendNodes_ = flatten(domain.sendNodes, sendOffsets_, "halo send nodes");
     meshNodes_ = communicator.sum(domain.numOwned());
     receiveNodes_ = flatten(domain.receiveNodes, receiveOffsets_, "halo receive nodes");
+    Kokkos::View<int*, Kokkos::HostSpace> slots("owner slots", domain.owned.size());
+    for (std::size_t k = 0; k < domain.owned.size(); ++k) slots(k) = domain.owned[k] ? 0 : -1;
+    for (std::size_t r = 0; r < domain.receiveNodes.size(); ++r)
+      for (const LocalIndex node : domain.receiveNodes[r]) slots(node) = 1 + static_cast<int>(r);
+    ownerSlots_ = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, slots);
   }
 
   bool distributed() const { return owned_.extent(0) > 0; }
@@ -40,6 +45,11 @@ class NodeDistribution {
   const Kokkos::View<std::uint8_t*, MemorySpaceT>& owned() const { return owned_; }
   // The global (mesh) number of every local node; empty on a single rank (local = global).
   const Kokkos::View<long long*, MemorySpaceT>& globalIds() const { return globalIds_; }
+  // The ranks this one exchanges halo nodes with.
+  const std::vector<int>& neighbourRanks() const { return ranks_; }
+  // Per local node: 0 where this rank owns it, 1 + k where neighbourRanks()[k] owns it (a halo
+  // node the exchange fills), -1 for the rest of the halo; empty on a single rank.
+  const Kokkos::View<int*, MemorySpaceT>& ownerSlots() const { return ownerSlots_; }
   // The mesh nodes over every rank: how many terms of a sum over owned nodes may be non-zero
   // (parallel/reproducible_sum.hpp); on a single rank, the local count.
   long long meshNodes(std::size_t localNodes) const {
@@ -122,6 +132,7 @@ class NodeDistribution {
   Kokkos::View<std::uint8_t*, MemorySpaceT> owned_;
   Kokkos::View<long long*, MemorySpaceT> globalIds_;
   Kokkos::View<LocalIndex*, MemorySpaceT> sendNodes_, receiveNodes_;
+  Kokkos::View<int*, MemorySpaceT> ownerSlots_;
   std::vector<std::size_t> sendOffsets_, receiveOffsets_;
   int bufferWidth_ = 0;  // doubles per node the buffers hold
   Kokkos::View<double*, MemorySpaceT> sendBuffer_, receiveBuffer_;

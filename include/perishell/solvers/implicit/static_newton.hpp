@@ -16,6 +16,7 @@
 #include <perishell/pd/bond_tangent.hpp>
 #include <perishell/shell/shell_body.hpp>
 #include <perishell/solvers/belos/cg_solve.hpp>
+#include <perishell/solvers/belos/subdomain_coarse_space.hpp>
 #include <perishell/solvers/direct/factorization_preconditioner.hpp>
 #include <perishell/solvers/explicit/external_actions.hpp>
 #include <perishell/solvers/multigrid/smoothed_aggregation.hpp>
@@ -164,6 +165,11 @@ struct NewtonOptions {
   LocalIndex amgCoarseNodes = multigrid::SmoothedAggregationOptions{}.maxCoarseNodes;
   // multigrid::SmoothedAggregationOptions::regionScaling (deck solver.amg-region-scaling).
   bool amgRegionScaling = true;
+  // Distributed runs: the ranks' preconditioners (AMG, Cholesky or block Jacobi of each owned
+  // block) are coupled by a coarse space of every rank's six rigid-body modes, balancing
+  // two-level Schwarz (belos/subdomain_coarse_space.hpp, docs/parallel.md); false: each rank's
+  // preconditioner alone, added over the ranks (deck solver.coarse-space).
+  bool coarseSpace = true;
   // Mixed-format Newton (docs/implicit.md): the shell elements' local forces s are carried
   // from iteration to iteration as independent unknowns, s <- K_l (d + B du), and the next
   // tangent's initial-stress term takes them in place of K_l d at the new state. Converged
@@ -425,6 +431,12 @@ class StaticNewtonSolver {
   // single rank. Symmetric and, where K is positive definite, positive definite.
   Matrix preconditionerMatrix(const Matrix& K);
 
+  // Distributed runs with NewtonOptions::coarseSpace: `local` (this rank's preconditioner)
+  // within the coarse space over the ranks, built from K when there is none (the callers drop
+  // it whenever they rebuild `local`); `local` itself otherwise. Collective.
+  Teuchos::RCP<const Belos::Operator<double>> coupleRanks(const Matrix& K,
+                                                          const Teuchos::RCP<const Belos::Operator<double>>& local);
+
   // Sets the halo rows of a vector of 6 DOF per local node to their owners' values (distributed
   // runs; nothing on a single rank).
   void fillHalo(const VectorView<Memory>& vector);
@@ -494,6 +506,7 @@ class StaticNewtonSolver {
   deck::Preconditioner active_ = deck::Preconditioner::BlockJacobi;
   long long freeDofs_ = 0;
   std::unique_ptr<direct::FactorizationPreconditioner<ExecutionSpaceT>> factor_;
+  std::shared_ptr<belos::SubdomainCoarseSpace<ExecutionSpaceT>> coarseSpace_;  // distributed runs (coupleRanks)
   bool factorCurrent_ = false;  // the factor is fresh enough to be reused
   bool factorPositiveDefinite_ = true;
   bool indefiniteNoted_ = false;  // the switch to L D L^T is noted once per run

@@ -573,8 +573,10 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveOnce(const Matrix& K, 
   if (!amg) {
     onEveryRank("the block-Jacobi preconditioner",
                 [&] { preconditioner = belos::detail::makePreconditioner(preconditionerMatrix(K), linear); });
+    coarseSpace_.reset();
   } else {
     if (!multigrid_ || rebuild) {
+      coarseSpace_.reset();
       ++report.preconditionerBuilds;
       updateCurrentPositions();
       multigrid::SmoothedAggregationOptions multigridOptions;
@@ -593,6 +595,7 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveOnce(const Matrix& K, 
     }
     preconditioner = Teuchos::rcp<const Belos::Operator<double>>(multigrid_.get(), false);
   }
+  preconditioner = coupleRanks(K, preconditioner);
   report.seconds.preconditioner += fencedSecondsSince(space_, start);
   Kokkos::deep_copy(space_, solution, 0.0);
   start = Clock::now();
@@ -682,6 +685,7 @@ direct::FactorizationInfo StaticNewtonSolver<ExecutionSpaceT>::factorize(const M
   }
   factorPositiveDefinite_ = info.positiveDefinite;
   factorCurrent_ = true;
+  coarseSpace_.reset();
   return info;
 }
 
@@ -692,10 +696,10 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::krylovWithFactor(const Matr
                                                                       IncrementReport& report) {
   // CG needs an SPD preconditioner: an indefinite L D L^T goes with GMRES.
   if (!factorPositiveDefinite_) linear.method = belos::CgOptions::Method::Gmres;
+  const auto preconditioner = coupleRanks(K, Teuchos::rcp<const Belos::Operator<double>>(factor_.get(), false));
   Kokkos::deep_copy(space_, solution, 0.0);
   const auto start = std::chrono::steady_clock::now();
-  const belos::CgResult result = belos::solveCg<ExecutionSpaceT>(
-      K, rhs, solution, linear, Teuchos::rcp<const Belos::Operator<double>>(factor_.get(), false), rows_);
+  const belos::CgResult result = belos::solveCg<ExecutionSpaceT>(K, rhs, solution, linear, preconditioner, rows_);
   fillHalo(solution);
   report.seconds.linearSolve += fencedSecondsSince(space_, start);
   report.linearIterations += result.iterations;
@@ -1004,6 +1008,19 @@ auto StaticNewtonSolver<ExecutionSpaceT>::preconditionerMatrix(const Matrix& K) 
         }
       });
   return Matrix("perishell::newton::ownedBlock", K.numRows(), K.numCols(), K.nnz(), blockValues, rowMap, columns);
+}
+
+template <class ExecutionSpaceT>
+Teuchos::RCP<const Belos::Operator<double>> StaticNewtonSolver<ExecutionSpaceT>::coupleRanks(
+    const Matrix& K, const Teuchos::RCP<const Belos::Operator<double>>& local) {
+  if (!rows_ || !options_.coarseSpace) return local;
+  if (!coarseSpace_) {
+    updateCurrentPositions();
+    coarseSpace_ = std::make_shared<belos::SubdomainCoarseSpace<ExecutionSpaceT>>(
+        space_, K, distribution_.ownerSlots(), distribution_.neighbourRanks(), isConstrained_, currentPositions_,
+        communicator(), local);
+  }
+  return Teuchos::rcp<const Belos::Operator<double>>(coarseSpace_.get(), false);
 }
 
 template <class ExecutionSpaceT>

@@ -33,6 +33,8 @@ static_assert(deck::ImplicitSettings{}.amgCoarseNodes == multigrid::SmoothedAggr
               "the deck's default solver.amg-coarse-nodes is the multigrid's default");
 static_assert(deck::ImplicitSettings{}.amgRegionScaling == multigrid::SmoothedAggregationOptions{}.regionScaling,
               "the deck's default solver.amg-region-scaling is the multigrid's default");
+static_assert(deck::ImplicitSettings{}.coarseSpace == NewtonOptions{}.coarseSpace,
+              "the deck's default solver.coarse-space is the solver's default");
 
 // The deck's Newton settings; momentsApplied: whether any load has a moment component (on any rank).
 inline NewtonOptions newtonOptions(const model::Model& model, bool momentsApplied) {
@@ -48,6 +50,7 @@ inline NewtonOptions newtonOptions(const model::Model& model, bool momentsApplie
   options.amgDropTolerance = settings.amgDropTolerance;
   options.amgCoarseNodes = settings.amgCoarseNodes;
   options.amgRegionScaling = settings.amgRegionScaling;
+  options.coarseSpace = settings.coarseSpace;
   options.preconditioner = settings.preconditioner;
   options.factorization = settings.factorization;
   options.tangent = settings.tangent == deck::Tangent::Exact || (settings.tangent == deck::Tangent::Auto && momentsApplied)

@@ -44,8 +44,6 @@
 #include <BelosTypes.hpp>
 
 #include <KokkosBlas1_axpby.hpp>
-#include <KokkosBlas1_nrm2.hpp>
-#include <KokkosBlas1_scal.hpp>
 #include <KokkosBlas2_gemv.hpp>
 #include <KokkosSparse_spmv.hpp>
 #include <Kokkos_Core.hpp>
@@ -254,22 +252,41 @@ void pseudoRandomStart(const ExecutionSpaceT& space, const Vector<ExecutionSpace
       });
 }
 
+template <class ExecutionSpaceT>
+using DeviceScalar = Kokkos::View<double, DeviceOf<ExecutionSpaceT>>;
+
+// x = y / |y| (zero where y is), with |y|^2 reduced into `squared` where the vectors live: a
+// power iteration reads no norm back to the host, so its kernels queue up on a GPU instead of
+// waiting for each other (the iterations of a rebuild were latency-bound there).
+template <class ExecutionSpaceT>
+void normalise(const ExecutionSpaceT& space, const Vector<ExecutionSpaceT>& y, const Vector<ExecutionSpaceT>& x,
+               const DeviceScalar<ExecutionSpaceT>& squared) {
+  const Kokkos::RangePolicy<ExecutionSpaceT> rows(space, 0, static_cast<LocalIndex>(y.extent(0)));
+  Kokkos::parallel_reduce(
+      "perishell::amg::squared_norm", rows,
+      KOKKOS_LAMBDA(const LocalIndex row, double& partial) { partial += y(row) * y(row); }, squared);
+  Kokkos::parallel_for(
+      "perishell::amg::normalise", rows, KOKKOS_LAMBDA(const LocalIndex row) {
+        const double sum = squared();
+        x(row) = sum > 0.0 ? y(row) / Kokkos::Experimental::sqrt(sum) : 0.0;
+      });
+}
+
 // Largest eigenvalue of M^-1 A by power iterations from pseudoRandomStart; x and y are work
 // vectors.
 template <class ExecutionSpaceT>
 double largestEigenvalue(const ExecutionSpaceT& space, const Matrix<ExecutionSpaceT>& scaled, int iterations,
                          const Vector<ExecutionSpaceT>& x, const Vector<ExecutionSpaceT>& y) {
+  const DeviceScalar<ExecutionSpaceT> squared("perishell::amg::squared_norm");
   pseudoRandomStart(space, x);
-  space.fence();
-  KokkosBlas::scal(x, 1.0 / KokkosBlas::nrm2(x), x);
-  double lambda = 0.0;
+  normalise(space, x, x, squared);
   for (int k = 0; k < iterations; ++k) {
     KokkosSparse::spmv("N", 1.0, scaled, x, 0.0, y);
-    lambda = KokkosBlas::nrm2(y);
-    if (!(lambda > 0.0)) break;
-    KokkosBlas::scal(x, 1.0 / lambda, y);
+    normalise(space, y, x, squared);
   }
-  return lambda;
+  double lambdaSquared = 0.0;
+  Kokkos::deep_copy(lambdaSquared, squared);
+  return std::sqrt(lambdaSquared);
 }
 
 // A node's regions as bit flags (SmoothedAggregationPreconditioner's `regions`): a coarse
@@ -318,7 +335,8 @@ void regionSpectralRadii(const ExecutionSpaceT& space, const Matrix<ExecutionSpa
   const auto entries = scaled.graph.entries;
   const auto values = scaled.values;
   pseudoRandomStart(space, x);
-  RegionSums squaredNorms;
+  // Reduced where the vectors live, as in normalise().
+  const Kokkos::View<RegionSums, DeviceOf<ExecutionSpaceT>> squaredNorms("perishell::amg::region_squared_norms");
   for (int k = 0; k < iterations; ++k) {
     Kokkos::parallel_reduce(
         "perishell::amg::region_power_product", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, scaled.numRows()),
@@ -330,18 +348,18 @@ void regionSpectralRadii(const ExecutionSpaceT& space, const Matrix<ExecutionSpa
           y(row) = sum;
           for (int r = 0; r < regionCount; ++r) partial.value[r] += r == region ? sum * sum : 0.0;
         },
-        Kokkos::Sum<RegionSums>(squaredNorms));
+        Kokkos::Sum<RegionSums, typename ExecutionSpaceT::memory_space>(squaredNorms));
     Kokkos::parallel_for(
         "perishell::amg::region_power_normalise", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, scaled.numRows()),
         KOKKOS_LAMBDA(const LocalIndex row) {
-          const double squared = squaredNorms.value[regions(row / dofPerNode)];
+          const double squared = squaredNorms().value[regions(row / dofPerNode)];
           x(row) = squared > 0.0 ? y(row) / Kokkos::Experimental::sqrt(squared) : 0.0;
         });
   }
   Kokkos::parallel_for(
       "perishell::amg::region_radius", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, radius.extent(0)),
       KOKKOS_LAMBDA(const LocalIndex node) {
-        radius(node) = Kokkos::Experimental::sqrt(squaredNorms.value[regions(node)]);
+        radius(node) = Kokkos::Experimental::sqrt(squaredNorms().value[regions(node)]);
       });
 }
 
