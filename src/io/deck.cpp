@@ -703,7 +703,8 @@ deck::Solver readSolver(const Section& section) {
                                               "damping", "shell-element", "hourglass"};
   const std::vector<std::string> implicitKeys{"type", "increments", "max-iterations", "tolerance",
                                               "preconditioner", "max-cuts", "tangent", "amg-reuse",
-                                              "amg-drop-tolerance", "amg-coarse-nodes", "amg-region-scaling", "coarse-space",
+                                              "amg-drop-tolerance", "amg-coarse-nodes", "amg-region-scaling",
+                                              "coarse-space", "overlap",
                                               "line-search", "control", "max-increments", "newton", "factorization"};
   std::vector<std::string> allKeys = explicitKeys;
   allKeys.insert(allKeys.end(), implicitKeys.begin() + 1, implicitKeys.end());
@@ -804,6 +805,7 @@ deck::Solver readSolver(const Section& section) {
     settings.amgCoarseNodes = static_cast<int>(coarseNodes);
     settings.amgRegionScaling = section.flag("amg-region-scaling", settings.amgRegionScaling);
     settings.coarseSpace = section.flag("coarse-space", settings.coarseSpace);
+    settings.overlap = section.flag("overlap", settings.overlap);
   }
   return solver;
 }

@@ -284,6 +284,8 @@ perishell:
     amg-drop-tolerance: 0.1
     amg-coarse-nodes: 120
     amg-region-scaling: false
+    coarse-space: false
+    overlap: false
     newton: displacement
     factorization: host
   output:
@@ -364,6 +366,8 @@ perishell:
   EXPECT_DOUBLE_EQ(deck.solver.implicitSettings.amgDropTolerance, 0.1);
   EXPECT_EQ(deck.solver.implicitSettings.amgCoarseNodes, 120);
   EXPECT_FALSE(deck.solver.implicitSettings.amgRegionScaling);
+  EXPECT_FALSE(deck.solver.implicitSettings.coarseSpace);
+  EXPECT_FALSE(deck.solver.implicitSettings.overlap);
   EXPECT_EQ(deck.solver.implicitSettings.newton, deck::ImplicitSettings::Newton::Displacement);
   EXPECT_EQ(deck.solver.implicitSettings.factorization, deck::Factorization::Host);
 
@@ -424,6 +428,8 @@ TEST(TEST_CATEGORY, deck_defaults_fill_what_a_minimal_deck_leaves_out) {
   EXPECT_DOUBLE_EQ(implicitSettings.amgDropTolerance, 0.05);
   EXPECT_EQ(implicitSettings.amgCoarseNodes, 200);
   EXPECT_TRUE(implicitSettings.amgRegionScaling);
+  EXPECT_TRUE(implicitSettings.coarseSpace);
+  EXPECT_TRUE(implicitSettings.overlap);
   EXPECT_EQ(implicitSettings.newton, deck::ImplicitSettings::Newton::Mixed);
   EXPECT_TRUE(implicitDeck.warnings.empty());
 }
@@ -621,6 +627,8 @@ TEST(TEST_CATEGORY, deck_every_rule_rejects_with_key_path_and_reason) {
        "solver.amg-coarse-nodes", {"must be a whole number in [1, 2000]", "got 0"}},
       {"amg local scaling not a flag", {{"    increments: 10\n", "    increments: 10\n    amg-region-scaling: 20\n"}},
        "solver.amg-region-scaling", {"expected true or false"}},
+      {"overlap not a flag", {{"    increments: 10\n", "    increments: 10\n    overlap: 2\n"}},
+       "solver.overlap", {"expected true or false"}},
       {"unknown generator", {{"generator: plate", "generator: disc"}}, "mesh.generator",
        {"'disc' is not one of plate, cylinder, hexagonal-prism, gmsh"}},
       {"unsupported version", {{"version: 1", "version: 2"}}, "version", {"unsupported deck version 2"}},

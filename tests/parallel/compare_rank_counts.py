@@ -14,8 +14,8 @@ Krylov iterations, cuts, residual) are not compared, and the Krylov iterations a
 each rank count.
 
 --max-krylov-growth G (implicit): the Krylov iterations over the run on any rank count may be
-at most G times the first rank count's; the coarse space over the ranks is what keeps them
-there (docs/parallel.md, "A coarse space over the ranks").
+at most G times the first rank count's; overlap and the coarse space over the ranks keep them
+there (docs/parallel.md, "Coupling the ranks' preconditioners").
 
 --restart-at N: checkpoints across rank counts. Each rank count also runs the deck's first N
 steps (increments), which ends in a checkpoint, and the next rank count in the list (the last

@@ -218,6 +218,9 @@ struct ImplicitSettings {
   // Whether a distributed run couples its ranks' preconditioners through a coarse space of
   // each rank's rigid-body modes (solvers::NewtonOptions::coarseSpace).
   bool coarseSpace = true;
+  // Whether each rank's preconditioner of a distributed run covers its exchanged halo nodes too
+  // (solvers::NewtonOptions::overlap).
+  bool overlap = true;
   bool lineSearch = false;  // solvers::NewtonOptions::lineSearch
   // Mixed: the shell elements' local forces are Newton unknowns of their own
   // (solvers::NewtonOptions::mixedFormat); Displacement: the classical Newton.

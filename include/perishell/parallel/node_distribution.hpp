@@ -21,7 +21,8 @@ class NodeDistribution {
   NodeDistribution() = default;
 
   explicit NodeDistribution(const LocalDomain& domain, const Communicator& communicator)
-      : communicator_(communicator), ranks_(domain.ranks) {
+      : communicator_(communicator), ranks_(domain.ranks), sendLists_(domain.sendNodes),
+        receiveLists_(domain.receiveNodes) {
     const auto hostOwned = Kokkos::View<const std::uint8_t*, Kokkos::HostSpace, Kokkos::MemoryUnmanaged>(
         domain.owned.data(), domain.owned.size());
     owned_ = Kokkos::View<std::uint8_t*, MemorySpaceT>("owned nodes", domain.owned.size());
@@ -45,8 +46,11 @@ class NodeDistribution {
   const Kokkos::View<std::uint8_t*, MemorySpaceT>& owned() const { return owned_; }
   // The global (mesh) number of every local node; empty on a single rank (local = global).
   const Kokkos::View<long long*, MemorySpaceT>& globalIds() const { return globalIds_; }
-  // The ranks this one exchanges halo nodes with.
+  // The ranks this one exchanges halo nodes with, and for neighbour k the local nodes it sends
+  // them (owned) and those it receives (halo), in the exchange's order.
   const std::vector<int>& neighbourRanks() const { return ranks_; }
+  const std::vector<std::vector<LocalIndex>>& sendLists() const { return sendLists_; }
+  const std::vector<std::vector<LocalIndex>>& receiveLists() const { return receiveLists_; }
   // Per local node: 0 where this rank owns it, 1 + k where neighbourRanks()[k] owns it (a halo
   // node the exchange fills), -1 for the rest of the halo; empty on a single rank.
   const Kokkos::View<int*, MemorySpaceT>& ownerSlots() const { return ownerSlots_; }
@@ -72,23 +76,58 @@ class NodeDistribution {
     (pack(space, views, column, width), ...);
     space.fence();
     Kokkos::deep_copy(hostSend_, sendBuffer_);
-    std::vector<const double*> sends;
-    std::vector<double*> receives;
-    std::vector<int> sendCounts, receiveCounts;
-    for (std::size_t k = 0; k < ranks_.size(); ++k) {
-      sends.push_back(hostSend_.data() + sendOffsets_[k] * width);
-      sendCounts.push_back(static_cast<int>((sendOffsets_[k + 1] - sendOffsets_[k]) * width));
-      receives.push_back(hostReceive_.data() + receiveOffsets_[k] * width);
-      receiveCounts.push_back(static_cast<int>((receiveOffsets_[k + 1] - receiveOffsets_[k]) * width));
-    }
-    communicator_.exchange(ranks_, sends, sendCounts, receives, receiveCounts);
+    exchangeStaged(hostSend_.data(), sendOffsets_, hostReceive_.data(), receiveOffsets_, width);
     Kokkos::deep_copy(receiveBuffer_, hostReceive_);
     column = 0;
     (unpack(space, views, column, width), ...);
   }
 
+  // The reverse of exchange(): adds every exchanged halo node's rows of `views` into its
+  // owner's rows on the owning rank (an overlapping Schwarz's halo contributions), one
+  // neighbour after the other in rank order, so the sums do not depend on timing. The halo rows
+  // are left as they were. Collective.
+  template <class ExecutionSpaceT, class ViewT>
+  void accumulate(const ExecutionSpaceT& space, const ViewT& view) {
+    if (!distributed()) return;
+    const int width = static_cast<int>(view.extent(1));
+    if (accumulateWidth_ < width) {
+      accumulateWidth_ = width;
+      returnBuffer_ = Kokkos::View<double*, MemorySpaceT>("halo return buffer", receiveNodes_.extent(0) * width);
+      gatherBuffer_ = Kokkos::View<double*, MemorySpaceT>("halo gather buffer", sendNodes_.extent(0) * width);
+      hostReturn_ = Kokkos::create_mirror_view(Kokkos::HostSpace{}, returnBuffer_);
+      hostGather_ = Kokkos::create_mirror_view(Kokkos::HostSpace{}, gatherBuffer_);
+    }
+    packRows(space, view, receiveNodes_, returnBuffer_);
+    space.fence();
+    Kokkos::deep_copy(hostReturn_, returnBuffer_);
+    exchangeStaged(hostReturn_.data(), receiveOffsets_, hostGather_.data(), sendOffsets_, width);
+    Kokkos::deep_copy(gatherBuffer_, hostGather_);
+    for (std::size_t k = 0; k < ranks_.size(); ++k) addRows(space, view, sendOffsets_[k], sendOffsets_[k + 1]);
+  }
+
   // The steps below launch kernels; public only because nvcc rejects extended lambdas in
   // private member functions.
+  template <class ExecutionSpaceT, class ViewT>
+  void packRows(const ExecutionSpaceT& space, const ViewT& view, const Kokkos::View<LocalIndex*, MemorySpaceT>& nodes,
+                const Kokkos::View<double*, MemorySpaceT>& buffer) const {
+    const int width = static_cast<int>(view.extent(1));
+    Kokkos::parallel_for(
+        "perishell::parallel::NodeDistribution::packRows",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, nodes.extent(0)), KOKKOS_LAMBDA(const std::size_t k) {
+          for (int c = 0; c < width; ++c) buffer(k * width + c) = view(nodes(k), c);
+        });
+  }
+  template <class ExecutionSpaceT, class ViewT>
+  void addRows(const ExecutionSpaceT& space, const ViewT& view, std::size_t first, std::size_t last) const {
+    const auto nodes = sendNodes_;
+    const auto buffer = gatherBuffer_;
+    const int width = static_cast<int>(view.extent(1));
+    Kokkos::parallel_for(
+        "perishell::parallel::NodeDistribution::addRows", Kokkos::RangePolicy<ExecutionSpaceT>(space, first, last),
+        KOKKOS_LAMBDA(const std::size_t k) {
+          for (int c = 0; c < width; ++c) view(nodes(k), c) += buffer(k * width + c);
+        });
+  }
   template <class ExecutionSpaceT, class ViewT>
   void pack(const ExecutionSpaceT& space, const ViewT& view, int& column, int width) const {
     const auto nodes = sendNodes_;
@@ -115,6 +154,22 @@ class NodeDistribution {
   }
 
  private:
+  // One host-staged message each way per neighbour k: `width` doubles per node, the nodes of
+  // neighbour k at [offsets[k], offsets[k + 1]) of each buffer.
+  void exchangeStaged(const double* out, const std::vector<std::size_t>& outOffsets, double* in,
+                      const std::vector<std::size_t>& inOffsets, int width) const {
+    std::vector<const double*> sends;
+    std::vector<double*> receives;
+    std::vector<int> sendCounts, receiveCounts;
+    for (std::size_t k = 0; k < ranks_.size(); ++k) {
+      sends.push_back(out + outOffsets[k] * width);
+      sendCounts.push_back(static_cast<int>((outOffsets[k + 1] - outOffsets[k]) * width));
+      receives.push_back(in + inOffsets[k] * width);
+      receiveCounts.push_back(static_cast<int>((inOffsets[k + 1] - inOffsets[k]) * width));
+    }
+    communicator_.exchange(ranks_, sends, sendCounts, receives, receiveCounts);
+  }
+
   static Kokkos::View<LocalIndex*, MemorySpaceT> flatten(const std::vector<std::vector<LocalIndex>>& lists,
                                                         std::vector<std::size_t>& offsets, const char* label) {
     offsets.assign(1, 0);
@@ -133,10 +188,14 @@ class NodeDistribution {
   Kokkos::View<long long*, MemorySpaceT> globalIds_;
   Kokkos::View<LocalIndex*, MemorySpaceT> sendNodes_, receiveNodes_;
   Kokkos::View<int*, MemorySpaceT> ownerSlots_;
+  std::vector<std::vector<LocalIndex>> sendLists_, receiveLists_;
   std::vector<std::size_t> sendOffsets_, receiveOffsets_;
   int bufferWidth_ = 0;  // doubles per node the buffers hold
   Kokkos::View<double*, MemorySpaceT> sendBuffer_, receiveBuffer_;
   typename Kokkos::View<double*, MemorySpaceT>::HostMirror hostSend_, hostReceive_;
+  int accumulateWidth_ = 0;  // doubles per node the reverse buffers hold
+  Kokkos::View<double*, MemorySpaceT> returnBuffer_, gatherBuffer_;
+  typename Kokkos::View<double*, MemorySpaceT>::HostMirror hostReturn_, hostGather_;
 };
 
 }  // namespace perishell::parallel

@@ -1,8 +1,9 @@
 #pragma once
 // A coarse space that couples the ranks of a distributed implicit solve (docs/parallel.md,
-// "A coarse space over the ranks"). Each rank's preconditioner M_1 (AMG, a Cholesky factor or
-// block Jacobi of its owned block) holds the cut's neighbours fixed, so nothing carries a
-// correction from one subdomain to the next: the Krylov iterations grow with the rank count.
+// "Coupling the ranks' preconditioners"). Each rank's preconditioner M_1 (AMG, a Cholesky
+// factor or block Jacobi of its block, overlapping or not) reaches only a halo's depth past
+// its rank, so a smooth correction spreads slowly across the subdomains: the Krylov
+// iterations grow with the rank count.
 // The coarse space Z holds, for every rank p, the six rigid-body modes of its owned nodes in
 // the current configuration (about their centroid; zero on constrained DOF and elsewhere);
 // E = Z^T A Z (6P x 6P) is formed once per preconditioner build and pseudo-inverted on every

@@ -16,6 +16,7 @@
 #include <perishell/pd/bond_tangent.hpp>
 #include <perishell/shell/shell_body.hpp>
 #include <perishell/solvers/belos/cg_solve.hpp>
+#include <perishell/solvers/belos/overlapping_schwarz.hpp>
 #include <perishell/solvers/belos/subdomain_coarse_space.hpp>
 #include <perishell/solvers/direct/factorization_preconditioner.hpp>
 #include <perishell/solvers/explicit/external_actions.hpp>
@@ -170,6 +171,10 @@ struct NewtonOptions {
   // two-level Schwarz (belos/subdomain_coarse_space.hpp, docs/parallel.md); false: each rank's
   // preconditioner alone, added over the ranks (deck solver.coarse-space).
   bool coarseSpace = true;
+  // Distributed runs: each rank's preconditioner covers its owned nodes and the halo nodes the
+  // exchange fills, their rows imported whole from their owners (overlapping additive Schwarz,
+  // belos/overlapping_schwarz.hpp); false: the owned block alone (deck solver.overlap).
+  bool overlap = true;
   // Mixed-format Newton (docs/implicit.md): the shell elements' local forces s are carried
   // from iteration to iteration as independent unknowns, s <- K_l (d + B du), and the next
   // tangent's initial-stress term takes them in place of K_l d at the new state. Converged
@@ -426,14 +431,18 @@ class StaticNewtonSolver {
 
   void markConstrainedDofs();
 
-  // The tangent's owned block for the per-rank preconditioner (distributed runs): entries
-  // coupling an owned row to a halo column dropped, halo rows the identity; K itself on a
-  // single rank. Symmetric and, where K is positive definite, positive definite.
+  // The tangent's block for the per-rank preconditioner (distributed runs): with
+  // NewtonOptions::overlap the tangent on the owned and exchanged halo nodes, the halo rows
+  // imported from their owners (belos::OverlapImport); without, the owned block, entries
+  // coupling an owned row to a halo column dropped, halo rows the identity. K itself on a
+  // single rank. Symmetric and, where K is positive definite, positive definite. Collective.
   Matrix preconditionerMatrix(const Matrix& K);
 
-  // Distributed runs with NewtonOptions::coarseSpace: `local` (this rank's preconditioner)
-  // within the coarse space over the ranks, built from K when there is none (the callers drop
-  // it whenever they rebuild `local`); `local` itself otherwise. Collective.
+  // Distributed runs: `local` (this rank's preconditioner, of preconditionerMatrix(K)) as the
+  // Krylov method applies it: with NewtonOptions::overlap its overlapping Schwarz, with
+  // NewtonOptions::coarseSpace within the coarse space over the ranks (built from K). Made when
+  // there is none: the callers drop it whenever they rebuild `local`. `local` itself on a
+  // single rank. Collective.
   Teuchos::RCP<const Belos::Operator<double>> coupleRanks(const Matrix& K,
                                                           const Teuchos::RCP<const Belos::Operator<double>>& local);
 
@@ -506,7 +515,8 @@ class StaticNewtonSolver {
   deck::Preconditioner active_ = deck::Preconditioner::BlockJacobi;
   long long freeDofs_ = 0;
   std::unique_ptr<direct::FactorizationPreconditioner<ExecutionSpaceT>> factor_;
-  std::shared_ptr<belos::SubdomainCoarseSpace<ExecutionSpaceT>> coarseSpace_;  // distributed runs (coupleRanks)
+  Teuchos::RCP<const Belos::Operator<double>> coupled_;  // distributed runs (coupleRanks)
+  std::shared_ptr<belos::OverlapImport<ExecutionSpaceT>> overlapImport_;
   bool factorCurrent_ = false;  // the factor is fresh enough to be reused
   bool factorPositiveDefinite_ = true;
   bool indefiniteNoted_ = false;  // the switch to L D L^T is noted once per run

@@ -573,10 +573,10 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveOnce(const Matrix& K, 
   if (!amg) {
     onEveryRank("the block-Jacobi preconditioner",
                 [&] { preconditioner = belos::detail::makePreconditioner(preconditionerMatrix(K), linear); });
-    coarseSpace_.reset();
+    coupled_ = Teuchos::null;
   } else {
     if (!multigrid_ || rebuild) {
-      coarseSpace_.reset();
+      coupled_ = Teuchos::null;
       ++report.preconditionerBuilds;
       updateCurrentPositions();
       multigrid::SmoothedAggregationOptions multigridOptions;
@@ -685,7 +685,7 @@ direct::FactorizationInfo StaticNewtonSolver<ExecutionSpaceT>::factorize(const M
   }
   factorPositiveDefinite_ = info.positiveDefinite;
   factorCurrent_ = true;
-  coarseSpace_.reset();
+  coupled_ = Teuchos::null;
   return info;
 }
 
@@ -992,6 +992,12 @@ void StaticNewtonSolver<ExecutionSpaceT>::markConstrainedDofs() {
 template <class ExecutionSpaceT>
 auto StaticNewtonSolver<ExecutionSpaceT>::preconditionerMatrix(const Matrix& K) -> Matrix {
   if (!rows_) return K;
+  if (options_.overlap) {
+    if (!overlapImport_)
+      overlapImport_ = std::make_shared<belos::OverlapImport<ExecutionSpaceT>>(
+          space_, K, std::make_shared<parallel::NodeDistribution<Memory>>(distribution_));
+    return overlapImport_->overlapped(K);
+  }
   if (preconditionerValues_.extent(0) != K.values.extent(0))
     preconditionerValues_ = VectorView<Memory>("perishell::newton::preconditionerValues", K.values.extent(0));
   const auto rowMap = K.graph.row_map;
@@ -1013,14 +1019,20 @@ auto StaticNewtonSolver<ExecutionSpaceT>::preconditionerMatrix(const Matrix& K) 
 template <class ExecutionSpaceT>
 Teuchos::RCP<const Belos::Operator<double>> StaticNewtonSolver<ExecutionSpaceT>::coupleRanks(
     const Matrix& K, const Teuchos::RCP<const Belos::Operator<double>>& local) {
-  if (!rows_ || !options_.coarseSpace) return local;
-  if (!coarseSpace_) {
-    updateCurrentPositions();
-    coarseSpace_ = std::make_shared<belos::SubdomainCoarseSpace<ExecutionSpaceT>>(
-        space_, K, distribution_.ownerSlots(), distribution_.neighbourRanks(), isConstrained_, currentPositions_,
-        communicator(), local);
+  if (!rows_) return local;
+  if (coupled_.is_null()) {
+    coupled_ = local;
+    if (options_.overlap)
+      coupled_ = Teuchos::rcp(new belos::AdditiveSchwarz<ExecutionSpaceT>(
+          space_, std::make_shared<parallel::NodeDistribution<Memory>>(distribution_), coupled_, K.numRows()));
+    if (options_.coarseSpace) {
+      updateCurrentPositions();
+      coupled_ = Teuchos::rcp(new belos::SubdomainCoarseSpace<ExecutionSpaceT>(
+          space_, K, distribution_.ownerSlots(), distribution_.neighbourRanks(), isConstrained_, currentPositions_,
+          communicator(), coupled_));
+    }
   }
-  return Teuchos::rcp<const Belos::Operator<double>>(coarseSpace_.get(), false);
+  return coupled_;
 }
 
 template <class ExecutionSpaceT>

@@ -35,6 +35,8 @@ static_assert(deck::ImplicitSettings{}.amgRegionScaling == multigrid::SmoothedAg
               "the deck's default solver.amg-region-scaling is the multigrid's default");
 static_assert(deck::ImplicitSettings{}.coarseSpace == NewtonOptions{}.coarseSpace,
               "the deck's default solver.coarse-space is the solver's default");
+static_assert(deck::ImplicitSettings{}.overlap == NewtonOptions{}.overlap,
+              "the deck's default solver.overlap is the solver's default");
 
 // The deck's Newton settings; momentsApplied: whether any load has a moment component (on any rank).
 inline NewtonOptions newtonOptions(const model::Model& model, bool momentsApplied) {
@@ -51,6 +53,7 @@ inline NewtonOptions newtonOptions(const model::Model& model, bool momentsApplie
   options.amgCoarseNodes = settings.amgCoarseNodes;
   options.amgRegionScaling = settings.amgRegionScaling;
   options.coarseSpace = settings.coarseSpace;
+  options.overlap = settings.overlap;
   options.preconditioner = settings.preconditioner;
   options.factorization = settings.factorization;
   options.tangent = settings.tangent == deck::Tangent::Exact || (settings.tangent == deck::Tangent::Auto && momentsApplied)
