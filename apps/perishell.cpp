@@ -332,10 +332,14 @@ int runCheck(const std::vector<std::string>& args) {
     ranksMayDiverge = true;
     const auto local = perishell::solvers::makeLocalModel(perishell::ExecutionSpace{}, model, world);
     const bool isExplicit = deck.solver.type == perishell::deck::SolverType::Explicit;
-    // Explicit: the state each step; implicit: a vector of 6 DOF per node each Krylov iteration.
+    // Explicit: the state each step. Implicit, each Krylov iteration: the operator's input (6
+    // DOF per node), and with solver.overlap the preconditioner's input and its output's
+    // return to the owners (docs/parallel.md, "Coupling the ranks' preconditioners").
+    const int implicitDoubles = deck.solver.implicitSettings.overlap ? 18 : 6;
     perishell::solvers::printPartition(
         local.partitionRow(),
-        isExplicit ? perishell::solvers::CentralDifferenceSolver<perishell::ExecutionSpace>::haloDoublesPerNode : 6,
+        isExplicit ? perishell::solvers::CentralDifferenceSolver<perishell::ExecutionSpace>::haloDoublesPerNode
+                   : implicitDoubles,
         world, std::cout, isExplicit ? "step" : "Krylov iteration");
     std::cout.flush();
   }
