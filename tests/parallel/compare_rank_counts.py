@@ -39,6 +39,15 @@ import h5py
 import numpy as np
 
 
+def linear_iterations(log):
+    """The run summary's Krylov iterations ("linear iterations N"), or None."""
+    for line in log.splitlines():
+        fields = line.split()
+        if fields[:2] == ["linear", "iterations"] and len(fields) > 2 and fields[2].isdigit():
+            return int(fields[2])
+    return None
+
+
 def run(app, mpirun, deck, ranks, options):
     env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1")
@@ -82,12 +91,14 @@ def main():
         shutil.rmtree(args.work, ignore_errors=True)
         os.makedirs(args.work)
     outputs = {}
+    krylov = {}  # from the run summaries; a history holds only the increments it records
     for ranks in counts:
         directory = os.path.join(args.work, f"ranks-{ranks}")
         outputs[ranks] = directory
         if args.compare_only:
             continue
         log = run(args.app, args.mpirun, args.deck, ranks, ["--output", directory])
+        krylov[ranks] = linear_iterations(log)
         partition = [line for line in log.splitlines() if line.startswith("partition:") or "imbalance" in line]
         print(f"{ranks} rank(s): {' '.join(partition) if partition else 'one rank'}")
     if args.restart_at is not None:
@@ -99,6 +110,7 @@ def main():
                 continue
             run(args.app, args.mpirun, args.deck, first, ["--output", directory, "--max-steps", str(args.restart_at)])
             log = run(args.app, args.mpirun, args.deck, then, ["--restart", directory])
+            krylov[label] = linear_iterations(log)  # the summary counts from the run's start
             if "restart: continuing " not in log:
                 sys.exit(f"FAIL: the run on {then} rank(s) did not continue the checkpoint of {first}:\n{log[-4000:]}")
             print(f"{first} rank(s) to step {args.restart_at}, continued on {then} rank(s)")
@@ -106,7 +118,7 @@ def main():
 
     reference = outputs[counts[0]]
     if args.relative_tolerance is not None:
-        compare_within(args, counts, outputs)
+        compare_within(args, counts, outputs, krylov)
         return
     with open(os.path.join(reference, "history.csv")) as handle:
         rows = list(csv.DictReader(handle))
@@ -169,7 +181,7 @@ def column_family(name):
     return name
 
 
-def compare_within(args, counts, outputs):
+def compare_within(args, counts, outputs, summaries):
     reference = outputs[counts[0]]
     reference_history = history_columns(reference)
     reference_fields = datasets(reference)
@@ -178,10 +190,14 @@ def compare_within(args, counts, outputs):
     if not np.max(np.abs(reference_history["max-displacement"])) > 0:
         sys.exit(f"FAIL: nothing moved in {args.deck}; the comparison would test nothing")
     failures = []
-    krylov = {counts[0]: int(reference_history["linear-iterations"].sum())}
+    # The run summaries' counts; without them (--compare-only) the history's rows, which hold
+    # only the increments the deck records.
+    def recorded(history):
+        return int(history["linear-iterations"].sum()) if "linear-iterations" in history else -1
+    krylov = {counts[0]: summaries.get(counts[0]) or recorded(reference_history)}
     for ranks in counts[1:]:
         history = history_columns(outputs[ranks])
-        krylov[ranks] = int(history["linear-iterations"].sum()) if "linear-iterations" in history else -1
+        krylov[ranks] = summaries.get(ranks) or recorded(history)
         if sorted(history) != sorted(reference_history) or len(history["load-factor"]) != len(
                 reference_history["load-factor"]):
             failures.append(f"{ranks} ranks: history.csv has other columns or rows")
