@@ -1,12 +1,13 @@
 #pragma once
 // Overlapping additive Schwarz over the ranks of a distributed implicit solve (docs/parallel.md,
-// "Overlap"). Without overlap each rank's preconditioner sees its owned block with the cut's
-// neighbours held fixed; on a thin plate (a fourth-order problem) that costs Krylov iterations
-// growing fast with the rank count. Here each rank's block is widened by its exchanged halo
-// nodes (2 delta + 2 elements deep): A_p is the tangent restricted to those nodes, a principal
-// submatrix, hence symmetric and positive definite wherever the tangent is. A halo row
-// assembled locally holds only this rank's elements and bonds (with the initial-stress part
-// not even semi-definite), so the halo rows are imported whole from their owners.
+// "Coupling the ranks' preconditioners"). Without overlap each rank's preconditioner sees its
+// owned block with the cut's neighbours held fixed; on a thin plate (a fourth-order problem)
+// that costs Krylov iterations growing fast with the rank count. Here each rank's block is
+// widened by its exchanged halo nodes (3 delta + the transition + 2 elements deep): A_p is the
+// tangent restricted to those nodes, a principal submatrix, hence symmetric and positive
+// definite wherever the tangent is. A halo row assembled locally holds only this rank's
+// elements and bonds (with the initial-stress part not even semi-definite), so the halo rows
+// are imported whole from their owners.
 //
 // OverlapImport builds A_p: the owned rows from the local tangent, the exchanged halo rows
 // from their owners (their values packed on the device, staged through the host like the
