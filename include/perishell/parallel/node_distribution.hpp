@@ -153,9 +153,9 @@ class NodeDistribution {
     column += columns;
   }
 
- private:
-  // One host-staged message each way per neighbour k: `width` doubles per node, the nodes of
-  // neighbour k at [offsets[k], offsets[k + 1]) of each buffer.
+  // One host-staged message each way per neighbour k: `width` doubles per item, neighbour k's
+  // items at [offsets[k], offsets[k + 1]) of each buffer (halo nodes here; the overlap import's
+  // matrix entries). Collective.
   void exchangeStaged(const double* out, const std::vector<std::size_t>& outOffsets, double* in,
                       const std::vector<std::size_t>& inOffsets, int width) const {
     std::vector<const double*> sends;
@@ -170,6 +170,7 @@ class NodeDistribution {
     communicator_.exchange(ranks_, sends, sendCounts, receives, receiveCounts);
   }
 
+ private:
   static Kokkos::View<LocalIndex*, MemorySpaceT> flatten(const std::vector<std::vector<LocalIndex>>& lists,
                                                         std::vector<std::size_t>& offsets, const char* label) {
     offsets.assign(1, 0);

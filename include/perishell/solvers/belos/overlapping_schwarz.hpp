@@ -77,6 +77,7 @@ class OverlapImport {
     for (std::size_t node = 0; node < globalIds.extent(0); ++node)
       localOf[globalIds(node)] = static_cast<LocalIndex>(node);
     std::vector<long long> targets;  // -1: a column outside the overlap, dropped
+    std::unordered_map<LocalIndex, RowOffset> entryOf;
     receiveOffsets_.assign(1, 0);
     for (std::size_t k = 0; k < ranks.size(); ++k) {
       const auto& pattern = received[ranks[k]];
@@ -86,6 +87,8 @@ class OverlapImport {
           const std::size_t row = dofPerNode * static_cast<std::size_t>(node) + d;
           if (at >= pattern.size()) throw std::logic_error("perishell::belos::OverlapImport: a row is missing");
           const long long count = pattern[at++];
+          entryOf.clear();  // the local row's entries by column: a PD row holds hundreds
+          for (RowOffset e = rowMap(row); e < rowMap(row + 1); ++e) entryOf[entries(e)] = e;
           bool diagonal = false;
           for (long long c = 0; c < count; ++c, ++at) {
             const long long dof = pattern.at(at);
@@ -93,11 +96,11 @@ class OverlapImport {
             const auto found = localOf.find(dof / dofPerNode);
             if (found != localOf.end() && slots(found->second) >= 0) {
               const LocalIndex column = dofPerNode * found->second + static_cast<LocalIndex>(dof % dofPerNode);
-              for (RowOffset e = rowMap(row); e < rowMap(row + 1); ++e)
-                if (entries(e) == column) target = static_cast<long long>(e);
-              if (target < 0)
+              const auto entry = entryOf.find(column);
+              if (entry == entryOf.end())
                 throw std::logic_error("perishell::belos::OverlapImport: an imported row's column is local but not in "
                                        "the local pattern");
+              target = static_cast<long long>(entry->second);
               diagonal = diagonal || column == static_cast<LocalIndex>(row);
             }
             targets.push_back(target);
@@ -115,6 +118,9 @@ class OverlapImport {
     values_ = VectorView<memory_space>("perishell::overlap::values", K.values.extent(0));
   }
 
+  // The distribution the import exchanges over; AdditiveSchwarz shares it (and its buffers).
+  const std::shared_ptr<Distribution>& distribution() const { return distribution_; }
+
   // A_p from this rank's K (its pattern). Collective.
   Matrix overlapped(const Matrix& K) {
     const auto sources = sources_;
@@ -125,17 +131,7 @@ class OverlapImport {
         KOKKOS_LAMBDA(const std::size_t i) { send(i) = values(sources(i)); });
     space_.fence();
     Kokkos::deep_copy(hostSend_, sendBuffer_);
-    const auto& ranks = distribution_->neighbourRanks();
-    std::vector<const double*> sends;
-    std::vector<double*> receives;
-    std::vector<int> sendCounts, receiveCounts;
-    for (std::size_t k = 0; k < ranks.size(); ++k) {
-      sends.push_back(hostSend_.data() + sendOffsets_[k]);
-      sendCounts.push_back(static_cast<int>(sendOffsets_[k + 1] - sendOffsets_[k]));
-      receives.push_back(hostReceive_.data() + receiveOffsets_[k]);
-      receiveCounts.push_back(static_cast<int>(receiveOffsets_[k + 1] - receiveOffsets_[k]));
-    }
-    distribution_->communicator().exchange(ranks, sends, sendCounts, receives, receiveCounts);
+    distribution_->exchangeStaged(hostSend_.data(), sendOffsets_, hostReceive_.data(), receiveOffsets_, 1);
     Kokkos::deep_copy(receiveBuffer_, hostReceive_);
     fillOverlapped(K);
     return Matrix("perishell::overlap::A_p", K.numRows(), K.numCols(), K.nnz(), values_, K.graph.row_map,

@@ -437,6 +437,11 @@ class StaticNewtonSolver {
   // coupling an owned row to a halo column dropped, halo rows the identity. K itself on a
   // single rank. Symmetric and, where K is positive definite, positive definite. Collective.
   Matrix preconditionerMatrix(const Matrix& K);
+  // The overlap's import of halo rows (made from K's pattern on first use, once: the pattern
+  // never changes). Its distribution, a copy of distribution_ (the exchange buffers shared, used
+  // one at a time), also serves every AdditiveSchwarz, so their reverse buffers are made once.
+  // Collective.
+  belos::OverlapImport<ExecutionSpaceT>& overlapImport(const Matrix& K);
 
   // Distributed runs: `local` (this rank's preconditioner, of preconditionerMatrix(K)) as the
   // Krylov method applies it: with NewtonOptions::overlap its overlapping Schwarz, with
@@ -516,7 +521,7 @@ class StaticNewtonSolver {
   long long freeDofs_ = 0;
   std::unique_ptr<direct::FactorizationPreconditioner<ExecutionSpaceT>> factor_;
   Teuchos::RCP<const Belos::Operator<double>> coupled_;  // distributed runs (coupleRanks)
-  std::shared_ptr<belos::OverlapImport<ExecutionSpaceT>> overlapImport_;
+  std::unique_ptr<belos::OverlapImport<ExecutionSpaceT>> overlapImport_;  // distributed runs (overlapImport)
   bool factorCurrent_ = false;  // the factor is fresh enough to be reused
   bool factorPositiveDefinite_ = true;
   bool indefiniteNoted_ = false;  // the switch to L D L^T is noted once per run

@@ -992,12 +992,7 @@ void StaticNewtonSolver<ExecutionSpaceT>::markConstrainedDofs() {
 template <class ExecutionSpaceT>
 auto StaticNewtonSolver<ExecutionSpaceT>::preconditionerMatrix(const Matrix& K) -> Matrix {
   if (!rows_) return K;
-  if (options_.overlap) {
-    if (!overlapImport_)
-      overlapImport_ = std::make_shared<belos::OverlapImport<ExecutionSpaceT>>(
-          space_, K, std::make_shared<parallel::NodeDistribution<Memory>>(distribution_));
-    return overlapImport_->overlapped(K);
-  }
+  if (options_.overlap) return overlapImport(K).overlapped(K);
   if (preconditionerValues_.extent(0) != K.values.extent(0))
     preconditionerValues_ = VectorView<Memory>("perishell::newton::preconditionerValues", K.values.extent(0));
   const auto rowMap = K.graph.row_map;
@@ -1017,14 +1012,22 @@ auto StaticNewtonSolver<ExecutionSpaceT>::preconditionerMatrix(const Matrix& K) 
 }
 
 template <class ExecutionSpaceT>
+belos::OverlapImport<ExecutionSpaceT>& StaticNewtonSolver<ExecutionSpaceT>::overlapImport(const Matrix& K) {
+  if (!overlapImport_)
+    overlapImport_ = std::make_unique<belos::OverlapImport<ExecutionSpaceT>>(
+        space_, K, std::make_shared<parallel::NodeDistribution<Memory>>(distribution_));
+  return *overlapImport_;
+}
+
+template <class ExecutionSpaceT>
 Teuchos::RCP<const Belos::Operator<double>> StaticNewtonSolver<ExecutionSpaceT>::coupleRanks(
     const Matrix& K, const Teuchos::RCP<const Belos::Operator<double>>& local) {
   if (!rows_) return local;
   if (coupled_.is_null()) {
     coupled_ = local;
     if (options_.overlap)
-      coupled_ = Teuchos::rcp(new belos::AdditiveSchwarz<ExecutionSpaceT>(
-          space_, std::make_shared<parallel::NodeDistribution<Memory>>(distribution_), coupled_, K.numRows()));
+      coupled_ = Teuchos::rcp(new belos::AdditiveSchwarz<ExecutionSpaceT>(space_, overlapImport(K).distribution(),
+                                                                          coupled_, K.numRows()));
     if (options_.coarseSpace) {
       updateCurrentPositions();
       coupled_ = Teuchos::rcp(new belos::SubdomainCoarseSpace<ExecutionSpaceT>(
