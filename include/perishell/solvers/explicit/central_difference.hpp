@@ -20,6 +20,7 @@
 // per step; its energy then far exceeds the work done on the body, and the run stops with
 // ExplicitInstability instead of producing garbage.
 #include <perishell/core/fenced_seconds.hpp>
+#include <perishell/core/tridiagonal.hpp>
 #include <perishell/fracture/carry_broken_bonds.hpp>
 #include <perishell/fracture/damage.hpp>
 #include <perishell/io/checkpoint.hpp>
@@ -30,8 +31,6 @@
 #include <perishell/solvers/explicit/external_actions.hpp>
 #include <perishell/solvers/explicit/nodal_inertia.hpp>
 #include <perishell/shell/shell_body.hpp>
-
-#include <Eigen/Dense>
 
 #include <algorithm>
 #include <chrono>
@@ -722,18 +721,6 @@ class CentralDifferenceSolver {
           });
     }
     return grown;
-  }
-
-  // The largest eigenvalue of the symmetric tridiagonal matrix (diagonal, offDiagonal below it).
-  static double largestTridiagonalEigenvalue(const std::vector<double>& diagonal,
-                                             const std::vector<double>& offDiagonal) {
-    const auto n = static_cast<Eigen::Index>(diagonal.size());
-    Eigen::VectorXd d = Eigen::Map<const Eigen::VectorXd>(diagonal.data(), n);
-    Eigen::VectorXd e = n > 1 ? Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(offDiagonal.data(), n - 1))
-                              : Eigen::VectorXd();
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver;
-    solver.computeFromTridiagonal(d, e, Eigen::EigenvaluesOnly);
-    return solver.eigenvalues().maxCoeff();
   }
 
   // What a trial force evaluation writes besides the forces (discarded), and what it

@@ -583,6 +583,7 @@ belos::CgResult StaticNewtonSolver<ExecutionSpaceT>::solveOnce(const Matrix& K, 
       multigridOptions.dropTolerance = options_.amgDropTolerance;
       multigridOptions.maxCoarseNodes = options_.amgCoarseNodes;
       multigridOptions.regionScaling = options_.amgRegionScaling;
+      multigridOptions.symmetric = linear.method == belos::CgOptions::Method::Cg;
       onEveryRank("the multigrid preconditioner", [&] {
         if (multigrid_)
           multigrid_->update(preconditionerMatrix(K), currentPositions_);

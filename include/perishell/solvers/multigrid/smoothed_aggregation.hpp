@@ -17,8 +17,8 @@
 // - P = (I - omega M^-1 A) P_tent with M = diag(lambda_r(i)) D, D the 6x6 nodal block
 //   diagonal, lambda_r = lambda_max(D^-1 A) on the nodes of region r alone (the caller's
 //   regions: PD nodes and shell-only nodes; a coarse node, an aggregate, is in the union of
-//   its members' regions; regionSpectralRadii), and omega = 4 / (3 lambda_max(M^-1 A)) (power
-//   iterations): each region of a model that mixes stiffnesses of different spectra (PD
+//   its members' regions), and omega = 4 / (3 lambda_max(M^-1 A)), both by Lanczos
+//   (largestEigenvalues): each region of a model that mixes stiffnesses of different spectra (PD
 //   bonds and shell elements) is damped and smoothed by its own spectrum, not the stiffest
 //   region's. A model of one region gets M = lambda D, the same hierarchy as with D;
 // - A_{l+1} = P^T A P (sparse_product.hpp: patterns once on the host, values on the device
@@ -32,6 +32,7 @@
 // and R = P^T exactly, so the preconditioner is symmetric, as CG needs. Apply() runs only
 // device kernels.
 #include <perishell/core/fenced_seconds.hpp>
+#include <perishell/core/tridiagonal.hpp>
 #include <perishell/core/types.hpp>
 #include <perishell/solvers/belos/block_jacobi.hpp>
 #include <perishell/solvers/belos/crs_operator.hpp>
@@ -75,10 +76,15 @@ struct SmoothedAggregationOptions {
   int chebyshevDegree = 2;
   double chebyshevEigenRatio = 30.0;
   double chebyshevBoost = 1.1;
-  // An underestimated lambda_max makes the Chebyshev polynomial negative on the top of the
-  // spectrum and the V-cycle indefinite (CG breaks down): 10 iterations from a random start
-  // did that on the tie plate 4.1.1 (tstSmoothedAggregation), 40 are ample and cost about
-  // as much as 5 preconditioned CG iterations.
+  // The spectrum bounds (lambda_max(M^-1 A) for omega and the Chebyshev interval, lambda_r by
+  // region; detail::largestEigenvalues): Lanczos steps where A is symmetric, power iterations
+  // where it is not (the exact tangent, for GMRES). An underestimated lambda_max makes the
+  // Chebyshev polynomial negative on the top of the spectrum and the V-cycle indefinite (CG
+  // breaks down): 10 power iterations from a random start did that on the tie plate 4.1.1
+  // (tstSmoothedAggregation); 40 are ample. Lanczos gets closer in fewer products
+  // (docs/implicit.md, "Spectrum bounds by Lanczos").
+  bool symmetric = true;
+  int lanczosSteps = 15;
   int powerIterations = 40;
   // Aggregation follows strong couplings only (aggregation.hpp, strongNodeGraphOf). A PD
   // node couples to every node of its horizon (~28 at delta = 3 dx), and aggregating whole
@@ -88,7 +94,7 @@ struct SmoothedAggregationOptions {
   // (docs/implicit.md, "Strength of connection"). 0 aggregates over every stored block.
   double dropTolerance = 0.05;
   // Scaling of the smoother's diagonal by region, M = diag(lambda_r(i)) D
-  // (regionSpectralRadii); false: M = D, one damping for the whole level. In a mixed model
+  // (detail::largestEigenvalues by region); false: M = D, one damping for the whole level. In a mixed model
   // lambda_max(D^-1 A) is the shell region's (2.40 on the pressed plate 4.2.1, against 1.54
   // for PD alone), which damped and smoothed the PD region with about 0.64 of its own omega
   // (docs/implicit.md, "Scaling by region").
@@ -236,57 +242,15 @@ void scaleByBlockInverse(const ExecutionSpaceT& space, const belos::detail::Bloc
       });
 }
 
-// x(row) in [-1, 1): a fixed pseudo-random start for power iterations (a hash of the row
-// index, so no random pool is built per update).
-template <class ExecutionSpaceT>
-void pseudoRandomStart(const ExecutionSpaceT& space, const Vector<ExecutionSpaceT>& x) {
-  Kokkos::parallel_for(
-      "perishell::amg::power_start", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, x.extent(0)),
-      KOKKOS_LAMBDA(const LocalIndex row) {
-        // splitmix64 finaliser: well-mixed bits, mapped to [-1, 1)
-        std::uint64_t z = static_cast<std::uint64_t>(row) + 0x9e3779b97f4a7c15ull;
-        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-        z ^= z >> 31;
-        x(row) = 2.0 * static_cast<double>(z >> 11) * 0x1.0p-53 - 1.0;
-      });
-}
-
-template <class ExecutionSpaceT>
-using DeviceScalar = Kokkos::View<double, DeviceOf<ExecutionSpaceT>>;
-
-// x = y / |y| (zero where y is), with |y|^2 reduced into `squared` where the vectors live: a
-// power iteration reads no norm back to the host, so its kernels queue up on a GPU instead of
-// waiting for each other (the iterations of a rebuild were latency-bound there).
-template <class ExecutionSpaceT>
-void normalise(const ExecutionSpaceT& space, const Vector<ExecutionSpaceT>& y, const Vector<ExecutionSpaceT>& x,
-               const DeviceScalar<ExecutionSpaceT>& squared) {
-  const Kokkos::RangePolicy<ExecutionSpaceT> rows(space, 0, static_cast<LocalIndex>(y.extent(0)));
-  Kokkos::parallel_reduce(
-      "perishell::amg::squared_norm", rows,
-      KOKKOS_LAMBDA(const LocalIndex row, double& partial) { partial += y(row) * y(row); }, squared);
-  Kokkos::parallel_for(
-      "perishell::amg::normalise", rows, KOKKOS_LAMBDA(const LocalIndex row) {
-        const double sum = squared();
-        x(row) = sum > 0.0 ? y(row) / Kokkos::Experimental::sqrt(sum) : 0.0;
-      });
-}
-
-// Largest eigenvalue of M^-1 A by power iterations from pseudoRandomStart; x and y are work
-// vectors.
-template <class ExecutionSpaceT>
-double largestEigenvalue(const ExecutionSpaceT& space, const Matrix<ExecutionSpaceT>& scaled, int iterations,
-                         const Vector<ExecutionSpaceT>& x, const Vector<ExecutionSpaceT>& y) {
-  const DeviceScalar<ExecutionSpaceT> squared("perishell::amg::squared_norm");
-  pseudoRandomStart(space, x);
-  normalise(space, x, x, squared);
-  for (int k = 0; k < iterations; ++k) {
-    KokkosSparse::spmv("N", 1.0, scaled, x, 0.0, y);
-    normalise(space, y, x, squared);
-  }
-  double lambdaSquared = 0.0;
-  Kokkos::deep_copy(lambdaSquared, squared);
-  return std::sqrt(lambdaSquared);
+// A fixed pseudo-random value in [-1, 1) per row (a hash of the row index, so no random pool
+// is built per update): the start of the spectrum estimates below.
+KOKKOS_INLINE_FUNCTION double pseudoRandom(LocalIndex row) {
+  // splitmix64 finaliser: well-mixed bits, mapped to [-1, 1)
+  std::uint64_t z = static_cast<std::uint64_t>(row) + 0x9e3779b97f4a7c15ull;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  z ^= z >> 31;
+  return 2.0 * static_cast<double>(z >> 11) * 0x1.0p-53 - 1.0;
 }
 
 // A node's regions as bit flags (SmoothedAggregationPreconditioner's `regions`): a coarse
@@ -306,7 +270,7 @@ struct RegionSums {
     for (int r = 0; r < regionCount; ++r) value[r] += other.value[r];
     return *this;
   }
-  // This Kokkos (3.x) joins volatile partial sums.
+  // Kokkos 3.4's reducers join through volatile references.
   KOKKOS_INLINE_FUNCTION void operator+=(const volatile RegionSums& other) volatile {
     for (int r = 0; r < regionCount; ++r) value[r] += other.value[r];
   }
@@ -323,54 +287,171 @@ struct Kokkos::reduction_identity<perishell::multigrid::detail::RegionSums> {
 namespace perishell::multigrid {
 namespace detail {
 
-// lambda_r = lambda_max(D_rr^-1 A_rr) of every region r, A_rr the rows and columns of its
-// nodes, by power iterations run side by side from pseudoRandomStart with the couplings
-// between regions left out; radius(node) = lambda of the node's region. scaled: D^-1 A; x and
-// y: work vectors of its rows.
+// The five vectors of a level's rows that largestEigenvalues works in.
 template <class ExecutionSpaceT>
-void regionSpectralRadii(const ExecutionSpaceT& space, const Matrix<ExecutionSpaceT>& scaled,
-                         const RegionView<ExecutionSpaceT>& regions, int iterations, const Vector<ExecutionSpaceT>& x,
-                         const Vector<ExecutionSpaceT>& y, const Vector<ExecutionSpaceT>& radius) {
-  const auto rowMap = scaled.graph.row_map;
-  const auto entries = scaled.graph.entries;
-  const auto values = scaled.values;
-  pseudoRandomStart(space, x);
-  // Reduced where the vectors live, as in normalise().
-  const Kokkos::View<RegionSums, DeviceOf<ExecutionSpaceT>> squaredNorms("perishell::amg::region_squared_norms");
-  for (int k = 0; k < iterations; ++k) {
-    Kokkos::parallel_reduce(
-        "perishell::amg::region_power_product", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, scaled.numRows()),
-        KOKKOS_LAMBDA(const LocalIndex row, RegionSums& partial) {
-          const int region = regions(row / dofPerNode);
-          double sum = 0.0;
-          for (RowOffset e = rowMap(row); e < rowMap(row + 1); ++e)
-            if (regions(entries(e) / dofPerNode) == region) sum += values(e) * x(entries(e));
-          y(row) = sum;
-          for (int r = 0; r < regionCount; ++r) partial.value[r] += r == region ? sum * sum : 0.0;
-        },
-        Kokkos::Sum<RegionSums, typename ExecutionSpaceT::memory_space>(squaredNorms));
-    Kokkos::parallel_for(
-        "perishell::amg::region_power_normalise", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, scaled.numRows()),
-        KOKKOS_LAMBDA(const LocalIndex row) {
-          const double squared = squaredNorms().value[regions(row / dofPerNode)];
-          x(row) = squared > 0.0 ? y(row) / Kokkos::Experimental::sqrt(squared) : 0.0;
-        });
-  }
+struct SpectrumWork {
+  Vector<ExecutionSpaceT> v, previous, mv, previousMv, product;
+  SpectrumWork() = default;
+  SpectrumWork(LocalIndex rows, const std::string& tag)
+      : v("perishell::amg::spectrum_v_" + tag, rows), previous("perishell::amg::spectrum_previous_" + tag, rows),
+        mv("perishell::amg::spectrum_mv_" + tag, rows), previousMv("perishell::amg::spectrum_previous_mv_" + tag, rows),
+        product("perishell::amg::spectrum_product_" + tag, rows) {}
+};
+
+// v (and M v) divided by the root of sums(k) of the row's region: a step of largestEigenvalues.
+template <class ExecutionSpaceT>
+void normaliseByRegion(const ExecutionSpaceT& space, const SpectrumWork<ExecutionSpaceT>& work,
+                       const Kokkos::View<RegionSums*, DeviceOf<ExecutionSpaceT>>& sums, int k,
+                       const RegionView<ExecutionSpaceT>& regions, bool symmetric) {
+  const bool byRegion = regions.extent(0) > 0;
   Kokkos::parallel_for(
-      "perishell::amg::region_radius", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, radius.extent(0)),
-      KOKKOS_LAMBDA(const LocalIndex node) {
-        radius(node) = Kokkos::Experimental::sqrt(squaredNorms().value[regions(node)]);
+      "perishell::amg::spectrum_normalise", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, work.v.extent(0)),
+      KOKKOS_LAMBDA(const LocalIndex row) {
+        const double squared = sums(k).value[byRegion ? regions(row / dofPerNode) : 0];
+        const double scale = squared > 0.0 ? 1.0 / Kokkos::Experimental::sqrt(squared) : 0.0;
+        work.v(row) *= scale;
+        if (symmetric) work.mv(row) *= scale;
       });
 }
 
-// D_i^-1 -> (lambda_i D_i)^-1: the block inverses become M's.
+// The largest eigenvalue of M^-1 A_rr for every region r at once, A_rr the rows and columns of
+// region r's nodes (no regions: one region, M^-1 A), M given by its nodal block inverses. A
+// must hold no couplings between regions (keepCouplingsWithinRegions), so that one product
+// serves every region.
+// - symmetric A (CG's tangent): Lanczos in the M inner product, in which M^-1 A is
+//   self-adjoint (alpha_j = v_j^T A v_j, beta_{j+1}^2 = w^T M w; M v is carried along, so M is
+//   never formed). The top Ritz value of `steps` products approaches lambda_max from below,
+//   never below the power iteration's estimate after as many products (its Krylov space holds
+//   the power iterate), and much faster (docs/implicit.md, "Spectrum bounds by Lanczos").
+// - non-symmetric A (the exact tangent, GMRES): `steps` power iterations, |M^-1 A x| for unit x.
+// Every step's coefficients are reduced where the vectors live and read back once at the end.
+template <class ExecutionSpaceT>
+RegionSums largestEigenvalues(const ExecutionSpaceT& space, const Matrix<ExecutionSpaceT>& A,
+                              const belos::detail::BlockInverseView<ExecutionSpaceT>& inverses,
+                              const RegionView<ExecutionSpaceT>& regions, bool symmetric, int steps,
+                              SpectrumWork<ExecutionSpaceT> work) {
+  using Memory = typename ExecutionSpaceT::memory_space;
+  // sums(0): the start's squared norm; step j: sums(1 + 2j) alpha_j, sums(2 + 2j) beta_{j+1}^2
+  // (Lanczos) or |M^-1 A x|^2 (power iterations); per region.
+  const Kokkos::View<RegionSums*, DeviceOf<ExecutionSpaceT>> sums("perishell::amg::spectrum_sums", 2 * steps + 1);
+  const auto into = [&sums](int k) {
+    return Kokkos::Sum<RegionSums, Memory>(Kokkos::View<RegionSums, Memory>(sums.data() + k));
+  };
+  const bool byRegion = regions.extent(0) > 0;
+  const LocalIndex numNodes = A.numRows() / dofPerNode;
+  const Kokkos::RangePolicy<ExecutionSpaceT> nodes(space, 0, numNodes), rows(space, 0, A.numRows());
+
+  // Start: M v = a pseudo-random vector, v = M^-1 of it (power iterations: v itself).
+  Kokkos::parallel_reduce(
+      "perishell::amg::spectrum_start", nodes,
+      KOKKOS_LAMBDA(const LocalIndex node, RegionSums& partial) {
+        const int region = byRegion ? regions(node) : 0;
+        double start[dofPerNode];
+        for (int a = 0; a < dofPerNode; ++a) start[a] = pseudoRandom(dofPerNode * node + a);
+        for (int a = 0; a < dofPerNode; ++a) {
+          const LocalIndex row = dofPerNode * node + a;
+          double v = start[a];
+          if (symmetric) {
+            v = 0.0;
+            for (int b = 0; b < dofPerNode; ++b) v += inverses(node, a, b) * start[b];
+            work.mv(row) = start[a];
+          }
+          work.v(row) = v;
+          partial.value[region] += v * start[a];
+        }
+      },
+      into(0));
+  normaliseByRegion(space, work, sums, 0, regions, symmetric);
+
+  for (int j = 0; j < steps; ++j) {
+    KokkosSparse::spmv("N", 1.0, A, work.v, 0.0, work.product);
+    if (symmetric)
+      Kokkos::parallel_reduce(
+          "perishell::amg::spectrum_alpha", rows,
+          KOKKOS_LAMBDA(const LocalIndex row, RegionSums& partial) {
+            partial.value[byRegion ? regions(row / dofPerNode) : 0] += work.v(row) * work.product(row);
+          },
+          into(1 + 2 * j));
+    // Lanczos: w = M^-1 A v_j - alpha_j v_j - beta_j v_{j-1} and M w, into the previous vectors;
+    // power iterations: M^-1 A v.
+    Kokkos::parallel_reduce(
+        "perishell::amg::spectrum_next", nodes,
+        KOKKOS_LAMBDA(const LocalIndex node, RegionSums& partial) {
+          const int region = byRegion ? regions(node) : 0;
+          const double alpha = symmetric ? sums(1 + 2 * j).value[region] : 0.0;
+          const double betaSquared = symmetric && j > 0 ? sums(2 * j).value[region] : 0.0;
+          const double beta = betaSquared > 0.0 ? Kokkos::Experimental::sqrt(betaSquared) : 0.0;
+          for (int a = 0; a < dofPerNode; ++a) {
+            const LocalIndex row = dofPerNode * node + a;
+            double w = 0.0;
+            for (int b = 0; b < dofPerNode; ++b) w += inverses(node, a, b) * work.product(dofPerNode * node + b);
+            if (symmetric) {
+              w -= alpha * work.v(row) + (beta > 0.0 ? beta * work.previous(row) : 0.0);
+              const double mw =
+                  work.product(row) - alpha * work.mv(row) - (beta > 0.0 ? beta * work.previousMv(row) : 0.0);
+              work.previousMv(row) = mw;
+              partial.value[region] += w * mw;
+            } else {
+              partial.value[region] += w * w;
+            }
+            work.previous(row) = w;
+          }
+        },
+        into(2 + 2 * j));
+    std::swap(work.v, work.previous);
+    std::swap(work.mv, work.previousMv);
+    normaliseByRegion(space, work, sums, 2 + 2 * j, regions, symmetric);
+  }
+
+  const auto host = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, sums);
+  RegionSums largest;
+  for (int r = 0; r < regionCount; ++r) {
+    if (!(host(0).value[r] > 0.0)) continue;  // no node of this region
+    if (!symmetric) {
+      largest.value[r] = std::sqrt(host(2 * steps).value[r]);
+      continue;
+    }
+    // The tridiagonal up to the first vanishing beta (an invariant subspace: its top is found).
+    std::vector<double> alphas, betas;
+    double scale = 0.0;
+    for (int j = 0; j < steps; ++j) {
+      alphas.push_back(host(1 + 2 * j).value[r]);
+      scale = std::max(scale, std::abs(alphas.back()));
+      const double betaSquared = host(2 + 2 * j).value[r];
+      if (!(betaSquared > 1e-24 * scale * scale)) break;
+      betas.push_back(std::sqrt(betaSquared));
+    }
+    largest.value[r] = largestTridiagonalEigenvalue(alphas, betas);
+  }
+  return largest;
+}
+
+// values of A without the couplings between nodes of different regions.
+template <class ExecutionSpaceT>
+void keepCouplingsWithinRegions(const ExecutionSpaceT& space, const Matrix<ExecutionSpaceT>& A,
+                                const RegionView<ExecutionSpaceT>& regions,
+                                const VectorView<typename ExecutionSpaceT::memory_space>& within) {
+  const auto rowMap = A.graph.row_map;
+  const auto entries = A.graph.entries;
+  const auto values = A.values;
+  Kokkos::parallel_for(
+      "perishell::amg::keep_couplings_within_regions", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, A.numRows()),
+      KOKKOS_LAMBDA(const LocalIndex row) {
+        const int region = regions(row / dofPerNode);
+        for (RowOffset e = rowMap(row); e < rowMap(row + 1); ++e)
+          within(e) = regions(entries(e) / dofPerNode) == region ? values(e) : 0.0;
+      });
+}
+
+// D_i^-1 -> (lambda_r D_i)^-1, r node i's region: the block inverses become M's.
 template <class ExecutionSpaceT>
 void scaleBlockInverses(const ExecutionSpaceT& space, const belos::detail::BlockInverseView<ExecutionSpaceT>& inverses,
-                        const Vector<ExecutionSpaceT>& radius) {
+                        const RegionView<ExecutionSpaceT>& regions, const RegionSums& lambdas) {
   Kokkos::parallel_for(
-      "perishell::amg::scale_block_inverses", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, radius.extent(0)),
+      "perishell::amg::scale_block_inverses", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, inverses.extent(0)),
       KOKKOS_LAMBDA(const LocalIndex node) {
-        const double scale = radius(node) > 0.0 ? 1.0 / radius(node) : 1.0;
+        const double lambda = lambdas.value[regions(node)];
+        const double scale = lambda > 0.0 ? 1.0 / lambda : 1.0;
         for (int a = 0; a < dofPerNode; ++a)
           for (int b = 0; b < dofPerNode; ++b) inverses(node, a, b) *= scale;
       });
@@ -465,12 +546,12 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
                                   " node regions for " + std::to_string(positions.extent(0)) + " nodes");
     if (options.maxCoarseNodes < 1 || options.smallCoarseNodes < 1 || !(options.denseInverseBudget >= 0.0) ||
         options.maxLevels < 1 || options.chebyshevDegree < 1 ||
-        options.powerIterations < 1 || !(options.chebyshevEigenRatio > 1.0) ||
+        options.powerIterations < 1 || options.lanczosSteps < 1 || !(options.chebyshevEigenRatio > 1.0) ||
         !(options.dropTolerance >= 0.0 && options.dropTolerance < 1.0))
       throw std::invalid_argument(std::string(who) +
                                   ": options need maxCoarseNodes, smallCoarseNodes, maxLevels, chebyshevDegree, "
-                                  "powerIterations >= 1, denseInverseBudget >= 0, chebyshevEigenRatio > 1 and "
-                                  "0 <= dropTolerance < 1");
+                                  "powerIterations, lanczosSteps >= 1, denseInverseBudget >= 0, "
+                                  "chebyshevEigenRatio > 1 and 0 <= dropTolerance < 1");
     levels_.emplace_back();
     setRegions(0, regions.extent(0) != 0 ? hostCopy(regions)
                                          : std::vector<int>(positions.extent(0), 0));
@@ -547,8 +628,8 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     Kokkos::View<int*, detail::DeviceOf<ExecutionSpaceT>> regions;
     std::vector<int> hostRegions;
     int numRegions = 1;
-    vector_type regionRadius;
     double lambdaMax = 0.0;
+    detail::SpectrumWork<ExecutionSpaceT> spectrum;  // largestEigenvalues' vectors
     Kokkos::View<RowOffset*, detail::DeviceOf<ExecutionSpaceT>> aggregateOffsets;
     Kokkos::View<LocalIndex*, detail::DeviceOf<ExecutionSpaceT>> aggregateMembers, aggregateOf;
     matrix_type Ptent, Z, P, R, AP;
@@ -607,7 +688,7 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
                                                                                 numRows / dofPerNode);
       level.r = vector_type("perishell::amg::r_" + tag, numRows);
       level.w = vector_type("perishell::amg::w_" + tag, numRows);
-      level.regionRadius = vector_type("perishell::amg::region_radius_" + tag, numRows / dofPerNode);
+      level.spectrum = detail::SpectrumWork<ExecutionSpaceT>(numRows, tag);
     }
     levels_.emplace_back();
     std::vector<int> coarseRegions(aggregates.numAggregates, 0);
@@ -692,15 +773,19 @@ class SmoothedAggregationPreconditioner final : public Belos::Operator<double> {
     if (failed >= 0)
       belos::detail::throwFailedBlock<ExecutionSpaceT>(std::string(who) + " (level " + std::to_string(l) + ")", failed,
                                                        dofPerNode, level.blockDiagnoses);
-    detail::scaleByBlockInverse(space_, level.blockInverses, level.A, level.scaledA.values);
+    const bool symmetric = options_.symmetric;
+    const int steps = symmetric ? options_.lanczosSteps : options_.powerIterations;
     if (options_.regionScaling && level.numRegions > 1) {
-      detail::regionSpectralRadii(space_, level.scaledA, detail::RegionView<ExecutionSpaceT>(level.regions),
-                                  options_.powerIterations, level.w, level.r, level.regionRadius);
-      detail::scaleBlockInverses(space_, level.blockInverses, level.regionRadius);
-      detail::scaleByBlockInverse(space_, level.blockInverses, level.A, level.scaledA.values);
+      // scaledA's values hold A without the couplings between regions until M^-1 A is written.
+      const detail::RegionView<ExecutionSpaceT> regions(level.regions);
+      detail::keepCouplingsWithinRegions(space_, level.A, regions, level.scaledA.values);
+      const auto lambdas = detail::largestEigenvalues(space_, level.scaledA, level.blockInverses, regions, symmetric,
+                                                      steps, level.spectrum);
+      detail::scaleBlockInverses(space_, level.blockInverses, regions, lambdas);
     }
-    space_.fence();
-    level.lambdaMax = detail::largestEigenvalue(space_, level.scaledA, options_.powerIterations, level.w, level.r);
+    detail::scaleByBlockInverse(space_, level.blockInverses, level.A, level.scaledA.values);
+    level.lambdaMax =
+        detail::largestEigenvalues(space_, level.A, level.blockInverses, {}, symmetric, steps, level.spectrum).value[0];
     if (!(level.lambdaMax > 0.0) || !std::isfinite(level.lambdaMax))
       throw std::runtime_error(std::string(who) + ": level " + std::to_string(l) +
                                ": the largest eigenvalue of M^-1 A is " + std::to_string(level.lambdaMax) +
