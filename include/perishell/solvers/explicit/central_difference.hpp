@@ -96,6 +96,7 @@ template <class ExecutionSpaceT>
 class CentralDifferenceSolver {
  public:
   using MemorySpace = typename ExecutionSpaceT::memory_space;
+  using NodeList = Kokkos::View<const LocalIndex*, MemorySpace>;
   static_assert(is_execution_space_v<ExecutionSpaceT>);
 
   CentralDifferenceSolver(const ExecutionSpaceT& space, pd::PdBody<MemorySpace> body,
@@ -640,13 +641,15 @@ class CentralDifferenceSolver {
                          body_,
                          shell_,
                          options_.forceKernel,
-                         startSupport};
+                         startSupport,
+                         {}};
     if (startSupport.extent(0) > 0) {
       // The patch: the support's rows of bonds and the elements touching it (node-gather
       // evaluates only the rows it is given; bond-scatter would visit every bond).
       scratch.body.bonds = pd::restrictRows(space_, body_.bonds, startSupport);
       if (shell_) scratch.shell = shell::selectElements(space_, *shell_, startSupport);
       scratch.kernel = deck::ForceKernel::NodeGather;
+      scratch.nodes = productNodes(startSupport);
     }
     const auto constrained = actions_.constrainedDofs;
     const auto globalIds = distribution_.globalIds();
@@ -668,30 +671,31 @@ class CentralDifferenceSolver {
                              : (hash % 2001u) / 1000.0 - 1.0;
           }
         });
-    const double startNorm = std::sqrt(dot(q, q));
+    const auto& nodes = scratch.nodes;
+    const double startNorm = std::sqrt(dot(q, q, nodes));
     if (!(startNorm > 0.0)) {
       if (!everywhere) return criticalTimeStep_;  // the change touched prescribed DOFs only
       throw std::invalid_argument("explicit solver: every DOF is prescribed");
     }
-    scale(q, 1.0 / startNorm);
+    scale(q, 1.0 / startNorm, nodes);
     std::vector<double> diagonal, offDiagonal;
     double beta = 0.0, ritz = 0.0;
     for (int k = 0; k < maxProducts; ++k) {
       applyScaledStiffness(q, product, scratch);
-      const double alpha = dot(product, q);
+      const double alpha = dot(product, q, nodes);
       // product <- A q - alpha q - beta q_previous, the next Lanczos direction (unnormalised).
-      subtractProjections(product, q, alpha, previous, beta);
+      subtractProjections(product, q, alpha, previous, beta, nodes);
       diagonal.push_back(alpha);
       const double last = ritz;
       ritz = largestTridiagonalEigenvalue(diagonal, offDiagonal);
       lanczosProducts_ = k + 1;
       if (k + 1 >= 10 && std::abs(ritz - last) <= settledRitzChange * ritz) break;
-      beta = std::sqrt(dot(product, product));
+      beta = std::sqrt(dot(product, product, nodes));
       if (!(beta > 1e-14 * std::abs(ritz))) break;  // an invariant subspace: the spectrum's top is found
       offDiagonal.push_back(beta);
       std::swap(previous, q);
       std::swap(q, product);
-      scale(q, 1.0 / beta);
+      scale(q, 1.0 / beta, nodes);
     }
     if (!(ritz > 0.0) || !std::isfinite(ritz))
       throw std::runtime_error("explicit solver: the critical time step estimate failed (largest eigenvalue " +
@@ -737,6 +741,8 @@ class CentralDifferenceSolver {
     std::optional<shell::ShellBody<MemorySpace>> shell;
     deck::ForceKernel kernel;
     Kokkos::View<const std::uint8_t*, MemorySpace> support;
+    // The nodes a product can make non-zero (productNodes); empty: every node.
+    Kokkos::View<const LocalIndex*, MemorySpace> nodes;
   };
 
   // product = A v = M^-1/2 K M^-1/2 v at the prescribed DOFs' zero, from the forces at the trial
@@ -752,13 +758,16 @@ class CentralDifferenceSolver {
     const double amplitude = 1e-7;
     const double horizonLength = scratch.length;
     const auto owned = distribution_.owned();
-    const bool everyNode = owned.extent(0) == 0;
+    const bool everyOwned = owned.extent(0) == 0;
+    // A local estimate's vectors and trial state change only on its product nodes.
+    const NodeList nodes = scratch.nodes;
+    const bool everyNode = nodes.extent(0) == 0;
     double largest = 0.0;
     Kokkos::parallel_reduce(
-        "perishell::solvers::CentralDifferenceSolver::trialScale",
-        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes),
-        KOKKOS_LAMBDA(const LocalIndex node, double& maximum) {
-          if (!everyNode && !owned(node)) return;
+        "perishell::solvers::CentralDifferenceSolver::trialScale", overNodes(nodes),
+        KOKKOS_LAMBDA(const LocalIndex k, double& maximum) {
+          const LocalIndex node = everyNode ? k : nodes(k);
+          if (!everyOwned && !owned(node)) return;
           for (int d = 0; d < 6; ++d) {
             const double physical = Kokkos::Experimental::fabs(v(node, d)) /
                                     Kokkos::Experimental::sqrt(d < 3 ? mass(node) : rotaryInertia(node)) /
@@ -771,8 +780,9 @@ class CentralDifferenceSolver {
     if (!(largest > 0.0)) throw std::invalid_argument("explicit solver: every DOF is prescribed");
     const double epsilon = amplitude / largest;
     Kokkos::parallel_for(
-        "perishell::solvers::CentralDifferenceSolver::trialState",
-        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes), KOKKOS_LAMBDA(const LocalIndex node) {
+        "perishell::solvers::CentralDifferenceSolver::trialState", overNodes(nodes),
+        KOKKOS_LAMBDA(const LocalIndex i) {
+          const LocalIndex node = everyNode ? i : nodes(i);
           for (int k = 0; k < 3; ++k)
             trial.displacements(node, k) = epsilon * v(node, k) / Kokkos::Experimental::sqrt(mass(node));
           const double spin[3] = {epsilon * v(node, 3) / Kokkos::Experimental::sqrt(rotaryInertia(node)),
@@ -784,14 +794,23 @@ class CentralDifferenceSolver {
         });
     assembly::imposeMirrorImages(space_, actions_.mirrorImages, trial.displacements, trial.rotations,
                                  assembly::NothingPrescribed{});
-    fillContiguous(space_, product, 0.0);
+    if (everyNode) {
+      fillContiguous(space_, product, 0.0);
+    } else {
+      Kokkos::parallel_for(
+          "perishell::solvers::CentralDifferenceSolver::clearProduct", overNodes(nodes),
+          KOKKOS_LAMBDA(const LocalIndex k) {
+            for (int d = 0; d < 6; ++d) product(nodes(k), d) = 0.0;
+          });
+    }
     const pd::BondForceOutputs<MemorySpace> outputs{product, VectorView<MemorySpace>(), scratch.fracture, scratch.intact};
     addInternalForces(scratch.body, scratch.shell, scratch.kernel, trial, outputs);
     const auto support = scratch.support;
     const bool wholeModel = support.extent(0) == 0;
     Kokkos::parallel_for(
-        "perishell::solvers::CentralDifferenceSolver::scaledProduct",
-        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, numNodes), KOKKOS_LAMBDA(const LocalIndex node) {
+        "perishell::solvers::CentralDifferenceSolver::scaledProduct", overNodes(nodes),
+        KOKKOS_LAMBDA(const LocalIndex k) {
+          const LocalIndex node = everyNode ? k : nodes(k);
           for (int d = 0; d < 6; ++d)
             product(node, d) = ((constrained(node) >> d) & 1) || !(wholeModel || support(node))
                                    ? 0.0
@@ -802,19 +821,24 @@ class CentralDifferenceSolver {
 
   // a <- a - alpha b - beta c.
   void subtractProjections(const pd::NodalVectorView<MemorySpace>& a, const pd::NodalVectorView<MemorySpace>& b,
-                           double alpha, const pd::NodalVectorView<MemorySpace>& c, double beta) const {
+                           double alpha, const pd::NodalVectorView<MemorySpace>& c, double beta,
+                           const NodeList& nodes) const {
+    const bool everyNode = nodes.extent(0) == 0;
     Kokkos::parallel_for(
-        "perishell::solvers::CentralDifferenceSolver::lanczosProjections",
-        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, a.extent(0)), KOKKOS_LAMBDA(const std::size_t node) {
+        "perishell::solvers::CentralDifferenceSolver::lanczosProjections", overNodes(nodes),
+        KOKKOS_LAMBDA(const LocalIndex k) {
+          const LocalIndex node = everyNode ? k : nodes(k);
           for (int d = 0; d < 6; ++d) a(node, d) -= alpha * b(node, d) + beta * c(node, d);
         });
   }
 
   // a <- factor a.
-  void scale(const pd::NodalVectorView<MemorySpace>& a, double factor) const {
+  void scale(const pd::NodalVectorView<MemorySpace>& a, double factor, const NodeList& nodes) const {
+    const bool everyNode = nodes.extent(0) == 0;
     Kokkos::parallel_for(
-        "perishell::solvers::CentralDifferenceSolver::lanczosScale",
-        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, a.extent(0)), KOKKOS_LAMBDA(const std::size_t node) {
+        "perishell::solvers::CentralDifferenceSolver::lanczosScale", overNodes(nodes),
+        KOKKOS_LAMBDA(const LocalIndex k) {
+          const LocalIndex node = everyNode ? k : nodes(k);
           for (int d = 0; d < 6; ++d) a(node, d) *= factor;
         });
   }
@@ -829,18 +853,47 @@ class CentralDifferenceSolver {
         distribution_.communicator(), distribution_.meshNodes(values.extent(0)));
   }
 
-  double dot(const pd::NodalVectorView<MemorySpace>& a, const pd::NodalVectorView<MemorySpace>& b) const {
+  // Over `nodes` (empty: every node), where the vectors' non-zero rows are; the sum is
+  // reproducible, so leaving out zero rows changes no bit.
+  double dot(const pd::NodalVectorView<MemorySpace>& a, const pd::NodalVectorView<MemorySpace>& b,
+             const NodeList& nodes) const {
     const auto owned = distribution_.owned();
-    const bool everyNode = owned.extent(0) == 0;
+    const bool everyOwned = owned.extent(0) == 0;
+    const bool everyNode = nodes.extent(0) == 0;
     return parallel::reproducibleSum(
-        space_, a.extent(0),
-        KOKKOS_LAMBDA(const std::size_t node)->double {
+        space_, everyNode ? a.extent(0) : nodes.extent(0),
+        KOKKOS_LAMBDA(const std::size_t k)->double {
+          const std::size_t node = everyNode ? k : nodes(k);
           double partial = 0.0;
-          if (everyNode || owned(node))
+          if (everyOwned || owned(node))
             for (int d = 0; d < 6; ++d) partial += a(node, d) * b(node, d);
           return partial;
         },
         distribution_.communicator(), distribution_.meshNodes(a.extent(0)));
+  }
+
+  // k in [0, nodes' count), or every node where `nodes` is empty.
+  Kokkos::RangePolicy<ExecutionSpaceT> overNodes(const NodeList& nodes) const {
+    return Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, nodes.extent(0) > 0 ? nodes.extent(0) : body_.numNodes());
+  }
+
+  // The nodes a product over the patch `support` can make non-zero, ascending: the support's
+  // rows (node-gather), the nodes of the elements touching it, which are its neighbours, and
+  // the mirror images and their masters (condensed forces). Outside them every Lanczos
+  // vector, the trial state's displacement and rotation stay zero and the identity.
+  NodeList productNodes(const Kokkos::View<const std::uint8_t*, MemorySpace>& support) const {
+    const auto mask = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, withNeighbours(support));
+    const auto images = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.mirrorImages.nodes);
+    const auto masters = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.mirrorImages.masters);
+    std::vector<std::uint8_t> in(mask.data(), mask.data() + mask.extent(0));
+    for (std::size_t k = 0; k < images.extent(0); ++k) in[images(k)] = in[masters(k)] = 1;
+    std::vector<LocalIndex> list;
+    for (std::size_t node = 0; node < in.size(); ++node)
+      if (in[node]) list.push_back(static_cast<LocalIndex>(node));
+    Kokkos::View<LocalIndex*, MemorySpace> nodes("lanczos product nodes", list.size());
+    Kokkos::deep_copy(nodes, Kokkos::View<const LocalIndex*, Kokkos::HostSpace, Kokkos::MemoryUnmanaged>(
+                                 list.data(), list.size()));
+    return nodes;
   }
 
   // The longest bond, or without bonds the side of the largest node area: the length trial
