@@ -321,8 +321,8 @@ void normaliseByRegion(const ExecutionSpaceT& space, const SpectrumWork<Executio
 // - symmetric A (CG's tangent): Lanczos in the M inner product, in which M^-1 A is
 //   self-adjoint (alpha_j = v_j^T A v_j, beta_{j+1}^2 = w^T M w; M v is carried along, so M is
 //   never formed). The top Ritz value of `steps` products approaches lambda_max from below,
-//   never below the power iteration's estimate after as many products (its Krylov space holds
-//   the power iterate), and much faster (docs/implicit.md, "Spectrum bounds by Lanczos").
+//   never below the M-Rayleigh quotient of the power iterate from the same start (the Krylov
+//   space holds it), and much faster (docs/implicit.md, "Spectrum bounds by Lanczos").
 // - non-symmetric A (the exact tangent, GMRES): `steps` power iterations, |M^-1 A x| for unit x.
 // Every step's coefficients are reduced where the vectors live and read back once at the end.
 template <class ExecutionSpaceT>
