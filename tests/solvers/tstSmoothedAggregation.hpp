@@ -591,8 +591,8 @@ RegionSums largestEigenvalues(const Matrix& A, const perishell::belos::detail::B
                               bool symmetric, int steps,
                               const perishell::multigrid::detail::RegionView<Exec>& regions = {}) {
   namespace amg = perishell::multigrid::detail;
-  return amg::largestEigenvalues(Exec{}, A, inverses, regions, symmetric, steps,
-                                 amg::SpectrumWork<Exec>(A.numRows(), "test"));
+  amg::SpectrumWork<Exec> work(A.numRows(), "test");
+  return amg::largestEigenvalues(Exec{}, A, inverses, regions, symmetric, steps, work);
 }
 
 // The converged lambda_max(D^-1 A), the reference of the tests below: 2,000 power iterations.

@@ -882,19 +882,29 @@ class CentralDifferenceSolver {
   // the mirror images and their masters (condensed forces). Outside them every Lanczos
   // vector, the trial state's displacement and rotation stay zero and the identity.
   NodeList productNodes(const Kokkos::View<const std::uint8_t*, MemorySpace>& support) const {
-    const auto mask = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, withNeighbours(support));
-    const auto images = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.mirrorImages.nodes);
-    const auto masters = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.mirrorImages.masters);
-    std::vector<std::uint8_t> in(mask.data(), mask.data() + mask.extent(0));
-    for (std::size_t k = 0; k < images.extent(0); ++k) in[images(k)] = in[masters(k)] = 1;
-    std::vector<LocalIndex> list;
-    for (std::size_t node = 0; node < in.size(); ++node)
-      if (in[node]) list.push_back(static_cast<LocalIndex>(node));
-    Kokkos::View<LocalIndex*, MemorySpace> nodes("lanczos product nodes", list.size());
-    Kokkos::deep_copy(nodes, Kokkos::View<const LocalIndex*, Kokkos::HostSpace, Kokkos::MemoryUnmanaged>(
-                                 list.data(), list.size()));
-    return nodes;
+    const Kokkos::View<std::uint8_t*, MemorySpace> in("lanczos product node mask", body_.numNodes());
+    Kokkos::deep_copy(space_, in, withNeighbours(support));
+    const auto images = actions_.mirrorImages.nodes, masters = actions_.mirrorImages.masters;
+    Kokkos::parallel_for(
+        "perishell::solvers::CentralDifferenceSolver::productNodesImages",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, images.extent(0)), KOKKOS_LAMBDA(const std::size_t k) {
+          Kokkos::atomic_assign(&in(images(k)), std::uint8_t(1));
+          Kokkos::atomic_assign(&in(masters(k)), std::uint8_t(1));
+        });
+    const Kokkos::View<LocalIndex*, MemorySpace> nodes("lanczos product nodes", body_.numNodes());
+    LocalIndex count = 0;
+    Kokkos::parallel_scan(
+        "perishell::solvers::CentralDifferenceSolver::productNodes",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, body_.numNodes()),
+        KOKKOS_LAMBDA(const LocalIndex node, LocalIndex& sum, const bool final) {
+          if (!in(node)) return;
+          if (final) nodes(sum) = node;
+          ++sum;
+        },
+        count);
+    return Kokkos::subview(nodes, std::make_pair(LocalIndex(0), count));
   }
+
 
   // The longest bond, or without bonds the side of the largest node area: the length trial
   // displacements are scaled by.

@@ -287,10 +287,12 @@ struct Kokkos::reduction_identity<perishell::multigrid::detail::RegionSums> {
 namespace perishell::multigrid {
 namespace detail {
 
-// The five vectors of a level's rows that largestEigenvalues works in.
+// What largestEigenvalues works in: five vectors of a level's rows, and per step the sums it
+// reduces (sized on first use, so a rebuild allocates nothing).
 template <class ExecutionSpaceT>
 struct SpectrumWork {
   Vector<ExecutionSpaceT> v, previous, mv, previousMv, product;
+  Kokkos::View<RegionSums*, DeviceOf<ExecutionSpaceT>> sums;
   SpectrumWork() = default;
   SpectrumWork(LocalIndex rows, const std::string& tag)
       : v("perishell::amg::spectrum_v_" + tag, rows), previous("perishell::amg::spectrum_previous_" + tag, rows),
@@ -329,11 +331,13 @@ template <class ExecutionSpaceT>
 RegionSums largestEigenvalues(const ExecutionSpaceT& space, const Matrix<ExecutionSpaceT>& A,
                               const belos::detail::BlockInverseView<ExecutionSpaceT>& inverses,
                               const RegionView<ExecutionSpaceT>& regions, bool symmetric, int steps,
-                              SpectrumWork<ExecutionSpaceT> work) {
+                              SpectrumWork<ExecutionSpaceT>& work) {
   using Memory = typename ExecutionSpaceT::memory_space;
   // sums(0): the start's squared norm; step j: sums(1 + 2j) alpha_j, sums(2 + 2j) beta_{j+1}^2
   // (Lanczos) or |M^-1 A x|^2 (power iterations); per region.
-  const Kokkos::View<RegionSums*, DeviceOf<ExecutionSpaceT>> sums("perishell::amg::spectrum_sums", 2 * steps + 1);
+  if (work.sums.extent(0) < static_cast<std::size_t>(2 * steps + 1))
+    work.sums = decltype(work.sums)("perishell::amg::spectrum_sums", 2 * steps + 1);
+  const auto sums = work.sums;
   const auto into = [&sums](int k) {
     return Kokkos::Sum<RegionSums, Memory>(Kokkos::View<RegionSums, Memory>(sums.data() + k));
   };
