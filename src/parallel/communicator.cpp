@@ -127,16 +127,30 @@ std::vector<long long> Communicator::gather(const std::vector<long long>& values
   return gatherOnRoot(values, MPI_LONG_LONG, rank_, size_);
 }
 
-void Communicator::exchange(const std::vector<int>& ranks, const std::vector<const double*>& sends,
-                            const std::vector<int>& sendCounts, const std::vector<double*>& receives,
-                            const std::vector<int>& receiveCounts) const {
-  std::vector<MPI_Request> requests(2 * ranks.size());
+struct PendingExchange::Requests {
+  std::vector<MPI_Request> requests;
+};
+
+void PendingExchange::wait() {
+  if (!requests_) return;
+  auto requests = std::move(requests_);
+  check(MPI_Waitall(static_cast<int>(requests->requests.size()), requests->requests.data(), MPI_STATUSES_IGNORE),
+        "wait");
+}
+
+PendingExchange Communicator::startExchange(const std::vector<int>& ranks, const std::vector<const double*>& sends,
+                                            const std::vector<int>& sendCounts, const std::vector<double*>& receives,
+                                            const std::vector<int>& receiveCounts) const {
+  PendingExchange pending;
+  pending.requests_ = std::make_unique<PendingExchange::Requests>();
+  auto& requests = pending.requests_->requests;
+  requests.resize(2 * ranks.size(), MPI_REQUEST_NULL);
   for (std::size_t k = 0; k < ranks.size(); ++k)
     check(MPI_Irecv(receives[k], receiveCounts[k], MPI_DOUBLE, ranks[k], 7, MPI_COMM_WORLD, &requests[k]), "receive");
   for (std::size_t k = 0; k < ranks.size(); ++k)
     check(MPI_Isend(sends[k], sendCounts[k], MPI_DOUBLE, ranks[k], 7, MPI_COMM_WORLD, &requests[ranks.size() + k]),
           "send");
-  check(MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE), "wait");
+  return pending;
 }
 
 std::vector<std::vector<long long>> Communicator::allToAll(const std::vector<std::vector<long long>>& lists) const {
@@ -177,9 +191,13 @@ std::string Communicator::broadcast(const std::string& text) const { return text
 void Communicator::broadcast(std::vector<int>&) const {}
 std::vector<double> Communicator::gather(const std::vector<double>& values) const { return values; }
 std::vector<long long> Communicator::gather(const std::vector<long long>& values) const { return values; }
-void Communicator::exchange(const std::vector<int>& ranks, const std::vector<const double*>&, const std::vector<int>&,
-                            const std::vector<double*>&, const std::vector<int>&) const {
+struct PendingExchange::Requests {};
+void PendingExchange::wait() { requests_.reset(); }
+PendingExchange Communicator::startExchange(const std::vector<int>& ranks, const std::vector<const double*>&,
+                                            const std::vector<int>&, const std::vector<double*>&,
+                                            const std::vector<int>&) const {
   if (!ranks.empty()) throw std::logic_error("Communicator::exchange: a single rank has no neighbours");
+  return {};
 }
 std::vector<std::vector<long long>> Communicator::allToAll(const std::vector<std::vector<long long>>& lists) const {
   return lists;
@@ -187,5 +205,33 @@ std::vector<std::vector<long long>> Communicator::allToAll(const std::vector<std
 void Communicator::abort(int exitCode) const { std::exit(exitCode); }
 
 #endif
+
+// After the two definitions of Requests: unique_ptr destroys a complete type.
+PendingExchange::PendingExchange() = default;
+PendingExchange::~PendingExchange() {
+  // A destructor must not throw; wait() reports failures where it is called.
+  try {
+    wait();
+  } catch (...) {
+  }
+}
+PendingExchange::PendingExchange(PendingExchange&&) noexcept = default;
+PendingExchange& PendingExchange::operator=(PendingExchange&& other) noexcept {
+  if (this != &other) {
+    try {
+      wait();
+    } catch (...) {
+    }
+    requests_ = std::move(other.requests_);
+  }
+  return *this;
+}
+bool PendingExchange::active() const { return requests_ != nullptr; }
+
+void Communicator::exchange(const std::vector<int>& ranks, const std::vector<const double*>& sends,
+                            const std::vector<int>& sendCounts, const std::vector<double*>& receives,
+                            const std::vector<int>& receiveCounts) const {
+  startExchange(ranks, sends, sendCounts, receives, receiveCounts).wait();
+}
 
 }  // namespace perishell::parallel

@@ -4,6 +4,7 @@
 // solvers call the same collectives in either build. MPI stays out of this header: only
 // src/parallel/communicator.cpp includes mpi.h.
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,28 @@ class Environment {
 
  private:
   bool initialisedHere_ = false;  // finalise only an MPI this object started
+};
+
+// The messages of an exchange a Communicator started (startExchange): in flight until wait(),
+// which the destructor also calls, so that no message outlives the buffers it reads or fills.
+class PendingExchange {
+ public:
+  PendingExchange();
+  ~PendingExchange();
+  PendingExchange(PendingExchange&&) noexcept;
+  PendingExchange& operator=(PendingExchange&&) noexcept;
+  PendingExchange(const PendingExchange&) = delete;
+  PendingExchange& operator=(const PendingExchange&) = delete;
+
+  // True from the start until wait() returns.
+  bool active() const;
+  // Blocks until every send has left its buffer and every receive has filled its own.
+  void wait();
+
+ private:
+  friend class Communicator;
+  struct Requests;  // the MPI requests (src/parallel/communicator.cpp)
+  std::unique_ptr<Requests> requests_;
 };
 
 class Communicator {
@@ -64,6 +87,11 @@ class Communicator {
   void exchange(const std::vector<int>& ranks, const std::vector<const double*>& sends,
                 const std::vector<int>& sendCounts, const std::vector<double*>& receives,
                 const std::vector<int>& receiveCounts) const;
+  // The same exchange, returned in flight: the caller works on, then waits. Until then the send
+  // buffers must stay as they are and the receive buffers unread.
+  PendingExchange startExchange(const std::vector<int>& ranks, const std::vector<const double*>& sends,
+                                const std::vector<int>& sendCounts, const std::vector<double*>& receives,
+                                const std::vector<int>& receiveCounts) const;
   // Each rank sends lists[r] to rank r and returns what every rank sent it (index = sender).
   std::vector<std::vector<long long>> allToAll(const std::vector<std::vector<long long>>& lists) const;
 

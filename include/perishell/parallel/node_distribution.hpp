@@ -5,15 +5,34 @@
 //
 // The exchange packs the listed nodal views on the device (one buffer per neighbour, node by
 // node), stages the buffers through host memory and sends them with MPI, then unpacks on the
-// device. Host staging works with any MPI (Debian's Open MPI is not CUDA-aware).
+// device. Host staging works with any MPI (Debian's Open MPI is not CUDA-aware). It may be
+// started and finished apart (startExchange, finishExchange), so that a solver works on what
+// the exchange does not write while the messages travel.
 #include <perishell/core/types.hpp>
 #include <perishell/parallel/communicator.hpp>
 #include <perishell/parallel/domain.hpp>
 
 #include <cstdint>
+#include <stdexcept>
+#include <type_traits>
 #include <vector>
 
 namespace perishell::parallel {
+
+// Where the exchange's buffers are staged on the host: page-locked memory for a GPU's
+// buffers, so that the copies run at full speed without a driver-side bounce buffer; the
+// device buffers themselves where they are host memory already.
+template <class MemorySpaceT>
+struct StagingSpace {
+  using type = std::conditional_t<Kokkos::SpaceAccessibility<Kokkos::HostSpace, MemorySpaceT>::accessible,
+                                  MemorySpaceT, Kokkos::HostSpace>;
+};
+#ifdef KOKKOS_ENABLE_CUDA
+template <>
+struct StagingSpace<Kokkos::CudaSpace> {
+  using type = Kokkos::CudaHostPinnedSpace;
+};
+#endif
 
 template <class MemorySpaceT>
 class NodeDistribution {
@@ -63,24 +82,47 @@ class NodeDistribution {
   // Sets every halo node's rows of `views` (each nodes x columns) to the owner's. Collective.
   template <class ExecutionSpaceT, class... ViewTs>
   void exchange(const ExecutionSpaceT& space, const ViewTs&... views) {
+    startExchange(space, views...);
+    finishExchange(space, views...);
+  }
+
+  // The first half of exchange(): packs the owned rows the neighbours need, stages them and
+  // starts the messages. Until finishExchange the halo rows keep their old values; the views'
+  // owned rows may be read, not written (they were sent already, but an exchange started again
+  // before finishing is refused). Collective.
+  template <class ExecutionSpaceT, class... ViewTs>
+  void startExchange(const ExecutionSpaceT& space, const ViewTs&... views) {
     if (!distributed()) return;
+    if (pending_.active()) throw std::logic_error("NodeDistribution: an exchange started before the last one finished");
     const int width = (0 + ... + static_cast<int>(views.extent(1)));
     if (bufferWidth_ < width) {
       bufferWidth_ = width;
       sendBuffer_ = Kokkos::View<double*, MemorySpaceT>("halo send buffer", sendNodes_.extent(0) * width);
       receiveBuffer_ = Kokkos::View<double*, MemorySpaceT>("halo receive buffer", receiveNodes_.extent(0) * width);
-      hostSend_ = Kokkos::create_mirror_view(Kokkos::HostSpace{}, sendBuffer_);
-      hostReceive_ = Kokkos::create_mirror_view(Kokkos::HostSpace{}, receiveBuffer_);
+      hostSend_ = stagingMirror(sendBuffer_);
+      hostReceive_ = stagingMirror(receiveBuffer_);
     }
+    exchangeWidth_ = width;
     int column = 0;
     (pack(space, views, column, width), ...);
+    Kokkos::deep_copy(space, hostSend_, sendBuffer_);
     space.fence();
-    Kokkos::deep_copy(hostSend_, sendBuffer_);
-    exchangeStaged(hostSend_.data(), sendOffsets_, hostReceive_.data(), receiveOffsets_, width);
-    Kokkos::deep_copy(receiveBuffer_, hostReceive_);
-    column = 0;
+    pending_ = startStaged(hostSend_.data(), sendOffsets_, hostReceive_.data(), receiveOffsets_, width);
+  }
+
+  // The second half: waits for the messages and unpacks them into the halo rows of the same
+  // views, in the same order. Nothing when no exchange is in flight. Collective.
+  template <class ExecutionSpaceT, class... ViewTs>
+  void finishExchange(const ExecutionSpaceT& space, const ViewTs&... views) {
+    if (!pending_.active()) return;
+    const int width = (0 + ... + static_cast<int>(views.extent(1)));
+    if (width != exchangeWidth_) throw std::logic_error("NodeDistribution: an exchange finished with other views");
+    pending_.wait();
+    Kokkos::deep_copy(space, receiveBuffer_, hostReceive_);
+    int column = 0;
     (unpack(space, views, column, width), ...);
   }
+  bool exchangeInFlight() const { return pending_.active(); }
 
   // The reverse of exchange(): adds every exchanged halo node's rows of `views` into its
   // owner's rows on the owning rank (an overlapping Schwarz's halo contributions), one
@@ -94,14 +136,14 @@ class NodeDistribution {
       accumulateWidth_ = width;
       returnBuffer_ = Kokkos::View<double*, MemorySpaceT>("halo return buffer", receiveNodes_.extent(0) * width);
       gatherBuffer_ = Kokkos::View<double*, MemorySpaceT>("halo gather buffer", sendNodes_.extent(0) * width);
-      hostReturn_ = Kokkos::create_mirror_view(Kokkos::HostSpace{}, returnBuffer_);
-      hostGather_ = Kokkos::create_mirror_view(Kokkos::HostSpace{}, gatherBuffer_);
+      hostReturn_ = stagingMirror(returnBuffer_);
+      hostGather_ = stagingMirror(gatherBuffer_);
     }
     packRows(space, view, receiveNodes_, returnBuffer_);
+    Kokkos::deep_copy(space, hostReturn_, returnBuffer_);
     space.fence();
-    Kokkos::deep_copy(hostReturn_, returnBuffer_);
     exchangeStaged(hostReturn_.data(), receiveOffsets_, hostGather_.data(), sendOffsets_, width);
-    Kokkos::deep_copy(gatherBuffer_, hostGather_);
+    Kokkos::deep_copy(space, gatherBuffer_, hostGather_);
     for (std::size_t k = 0; k < ranks_.size(); ++k) addRows(space, view, sendOffsets_[k], sendOffsets_[k + 1]);
   }
 
@@ -158,6 +200,10 @@ class NodeDistribution {
   // matrix entries). Collective.
   void exchangeStaged(const double* out, const std::vector<std::size_t>& outOffsets, double* in,
                       const std::vector<std::size_t>& inOffsets, int width) const {
+    startStaged(out, outOffsets, in, inOffsets, width).wait();
+  }
+  PendingExchange startStaged(const double* out, const std::vector<std::size_t>& outOffsets, double* in,
+                              const std::vector<std::size_t>& inOffsets, int width) const {
     std::vector<const double*> sends;
     std::vector<double*> receives;
     std::vector<int> sendCounts, receiveCounts;
@@ -167,10 +213,20 @@ class NodeDistribution {
       receives.push_back(in + inOffsets[k] * width);
       receiveCounts.push_back(static_cast<int>((inOffsets[k + 1] - inOffsets[k]) * width));
     }
-    communicator_.exchange(ranks_, sends, sendCounts, receives, receiveCounts);
+    return communicator_.startExchange(ranks_, sends, sendCounts, receives, receiveCounts);
   }
 
  private:
+  using Staging = typename StagingSpace<MemorySpaceT>::type;
+  using StagingView = Kokkos::View<double*, Staging>;
+  // The host side of a device buffer: the buffer itself where it is host memory (no copy).
+  static StagingView stagingMirror(const Kokkos::View<double*, MemorySpaceT>& buffer) {
+    if constexpr (std::is_same_v<Staging, MemorySpaceT>)
+      return buffer;
+    else
+      return StagingView(buffer.label() + " (staged)", buffer.extent(0));
+  }
+
   static Kokkos::View<LocalIndex*, MemorySpaceT> flatten(const std::vector<std::vector<LocalIndex>>& lists,
                                                         std::vector<std::size_t>& offsets, const char* label) {
     offsets.assign(1, 0);
@@ -191,12 +247,29 @@ class NodeDistribution {
   Kokkos::View<int*, MemorySpaceT> ownerSlots_;
   std::vector<std::vector<LocalIndex>> sendLists_, receiveLists_;
   std::vector<std::size_t> sendOffsets_, receiveOffsets_;
-  int bufferWidth_ = 0;  // doubles per node the buffers hold
+  int bufferWidth_ = 0;    // doubles per node the buffers hold
+  int exchangeWidth_ = 0;  // doubles per node the exchange in flight sends
   Kokkos::View<double*, MemorySpaceT> sendBuffer_, receiveBuffer_;
-  typename Kokkos::View<double*, MemorySpaceT>::HostMirror hostSend_, hostReceive_;
+  StagingView hostSend_, hostReceive_;
+  // The exchange in flight; a copy of the distribution starts with none.
+  struct InFlight : PendingExchange {
+    InFlight() = default;
+    InFlight(const InFlight&) : PendingExchange() {}
+    InFlight(InFlight&&) noexcept = default;
+    InFlight& operator=(const InFlight&) {
+      wait();
+      return *this;
+    }
+    InFlight& operator=(InFlight&&) noexcept = default;
+    InFlight& operator=(PendingExchange&& started) {
+      PendingExchange::operator=(std::move(started));
+      return *this;
+    }
+  };
+  InFlight pending_;
   int accumulateWidth_ = 0;  // doubles per node the reverse buffers hold
   Kokkos::View<double*, MemorySpaceT> returnBuffer_, gatherBuffer_;
-  typename Kokkos::View<double*, MemorySpaceT>::HostMirror hostReturn_, hostGather_;
+  StagingView hostReturn_, hostGather_;
 };
 
 }  // namespace perishell::parallel

@@ -311,21 +311,41 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(const ExecutionS
   return makeShellBody(space, mesh, ccmElements, section, fullSection);
 }
 
+// Which of a body's elements a force kernel evaluates: every one, or those listed (indices
+// into the body; a distributed explicit step evaluates its elements in two lists around the
+// halo exchange, solvers/explicit/central_difference.hpp).
+template <class MemorySpaceT>
+struct ElementSelection {
+  Kokkos::View<const LocalIndex*, MemorySpaceT> listed;
+  bool all = true;
+
+  static ElementSelection every() { return {}; }
+  static ElementSelection only(const Kokkos::View<const LocalIndex*, MemorySpaceT>& elements) {
+    return {elements, false};
+  }
+  LocalIndex count(LocalIndex numElements) const {
+    return all ? numElements : static_cast<LocalIndex>(listed.extent(0));
+  }
+  KOKKOS_INLINE_FUNCTION LocalIndex element(LocalIndex k) const { return all ? k : listed(k); }
+};
+
 namespace detail {
 
-// The one-point element's forces (OnePoint bodies), one thread per element, scattered with
-// atomics or written for the gather (ShellBody::assembly). WithTriangles: the body has
+// The one-point element's forces (OnePoint bodies), one thread per selected element, scattered
+// with atomics or written for the gather (ShellBody::assembly). WithTriangles: the body has
 // triangles, and each element takes the explicit triangle's branch or the quad's. A body of
 // quads only runs without that branch: fewer registers (246 against 254 per thread) and
 // 8 % less time per step at 1e6 elements on an H100 (docs/explicit.md).
 template <bool WithTriangles, class ExecutionSpaceT, class MemorySpaceT>
 void launchOnePointForces(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
-                          const pd::PdKinematics<MemorySpaceT>& state, const pd::NodalVectorView<MemorySpaceT>& forces,
-                          const VectorView<MemorySpaceT>& energy, const VectorView<MemorySpaceT>& hourglassEnergy,
-                          bool gather, bool withEnergy, bool withHourglass) {
+                          const ElementSelection<MemorySpaceT>& selection, const pd::PdKinematics<MemorySpaceT>& state,
+                          const pd::NodalVectorView<MemorySpaceT>& forces, const VectorView<MemorySpaceT>& energy,
+                          const VectorView<MemorySpaceT>& hourglassEnergy, bool gather, bool withEnergy,
+                          bool withHourglass) {
   Kokkos::parallel_for(
-      "perishell::shell::onePointShellForces", queuedRangePolicy(space, 0, body.numElements()),
-      KOKKOS_LAMBDA(const LocalIndex e) {
+      "perishell::shell::onePointShellForces", queuedRangePolicy(space, 0, selection.count(body.numElements())),
+      KOKKOS_LAMBDA(const LocalIndex k) {
+        const LocalIndex e = selection.element(k);
         double reference[4][3], current[4][3], quaternions[4][4], force[shellDofCount];
         loadExplicitElement(body, state, e, reference, current, quaternions);
         const double scale = 0.25 * (body.membraneBendingScale(e, 0) + body.membraneBendingScale(e, 1) +
@@ -356,6 +376,73 @@ void launchOnePointForces(const ExecutionSpaceT& space, const ShellBody<MemorySp
 
 }  // namespace detail
 
+// The first half of subtractShellForces, over the selected elements: forces -= their internal
+// forces (and energies added), except for a one-point body that gathers, whose selected
+// elements only write their forces for gatherShellForces. A step may call it for several
+// selections before the one gather; every element must be selected once.
+template <class ExecutionSpaceT, class MemorySpaceT>
+void subtractSelectedShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
+                                 const ElementSelection<MemorySpaceT>& selection,
+                                 const pd::PdKinematics<MemorySpaceT>& state,
+                                 const pd::NodalVectorView<MemorySpaceT>& forces,
+                                 const VectorView<MemorySpaceT>& energy = {},
+                                 const VectorView<MemorySpaceT>& hourglassEnergy = {}) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  const bool withEnergy = energy.extent(0) > 0;
+  if (selection.count(body.numElements()) == 0) return;
+  if (body.kind == ShellElementKind::OnePoint) {
+    const bool withHourglass = hourglassEnergy.extent(0) > 0;
+    const bool gather = body.assembly == ElementForceAssembly::Gather;
+    if (body.hasTriangles)
+      detail::launchOnePointForces<true>(space, body, selection, state, forces, energy, hourglassEnergy, gather,
+                                         withEnergy, withHourglass);
+    else
+      detail::launchOnePointForces<false>(space, body, selection, state, forces, energy, hourglassEnergy, gather,
+                                          withEnergy, withHourglass);
+    return;
+  }
+  Kokkos::parallel_for(
+      "perishell::shell::subtractShellForces", queuedRangePolicy(space, 0, selection.count(body.numElements())),
+      KOKKOS_LAMBDA(const LocalIndex k) {
+        const LocalIndex e = selection.element(k);
+        double reference[4][3], current[4][3], rotations[4][3][3];
+        detail::loadElement(body, state, e, reference, current, rotations);
+        // A triangle works on its 3 nodes: 18 DOF, not the collapsed quad's 24.
+        if (mesh::isTriangle(body.quads, e))
+          detail::subtractElementForce<3>(body, e, reference, current, rotations, forces, energy);
+        else
+          detail::subtractElementForce<4>(body, e, reference, current, rotations, forces, energy);
+      });
+}
+
+// The second half: a gathering one-point body's written element forces summed per node, each
+// node's elements in incidence order (no atomics), and subtracted; nothing for other bodies.
+template <class ExecutionSpaceT, class MemorySpaceT>
+void gatherShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpaceT>& body,
+                       const pd::NodalVectorView<MemorySpaceT>& forces, const VectorView<MemorySpaceT>& energy = {},
+                       const VectorView<MemorySpaceT>& hourglassEnergy = {}) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  if (body.kind != ShellElementKind::OnePoint || body.assembly != ElementForceAssembly::Gather) return;
+  const bool withEnergy = energy.extent(0) > 0, withHourglass = hourglassEnergy.extent(0) > 0;
+  Kokkos::parallel_for(
+      "perishell::shell::gatherOnePointShellForces",
+      queuedRangePolicy(space, 0, static_cast<LocalIndex>(body.nodeElementOffsets.extent(0) - 1)),
+      KOKKOS_LAMBDA(const LocalIndex node) {
+        const RowOffset begin = body.nodeElementOffsets(node), end = body.nodeElementOffsets(node + 1);
+        if (begin == end) return;
+        double sum[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, strain = 0.0, hourglass = 0.0;
+        for (RowOffset k = begin; k < end; ++k) {
+          const LocalIndex entry = body.nodeElementEntries(k), e = entry / 4, corner = entry % 4;
+          for (int d = 0; d < 6; ++d) sum[d] += body.elementForces(e, 6 * corner + d);
+          strain += body.elementForces(e, 24);
+          hourglass += body.elementForces(e, 25);
+        }
+        for (int d = 0; d < 6; ++d) forces(node, d) -= sum[d];
+        if (withEnergy) energy(node) += strain;
+        if (withHourglass) hourglassEnergy(node) += hourglass;
+      });
+}
+
 // forces -= internal forces of every element (the caller's forces are the loads acting on
 // the nodes, so the result is the out-of-balance force). With a non-empty energy view, each
 // element's energy (MITC4: W = 1/2 d^T K_l d) is also added to it, in equal shares per node, and
@@ -365,48 +452,9 @@ void subtractShellForces(const ExecutionSpaceT& space, const ShellBody<MemorySpa
                          const pd::PdKinematics<MemorySpaceT>& state, const pd::NodalVectorView<MemorySpaceT>& forces,
                          const VectorView<MemorySpaceT>& energy = {},
                          const VectorView<MemorySpaceT>& hourglassEnergy = {}) {
-  static_assert(is_execution_space_v<ExecutionSpaceT>);
-  const bool withEnergy = energy.extent(0) > 0;
-  if (body.kind == ShellElementKind::OnePoint) {
-    const bool withHourglass = hourglassEnergy.extent(0) > 0;
-    const bool gather = body.assembly == ElementForceAssembly::Gather;
-    if (body.hasTriangles)
-      detail::launchOnePointForces<true>(space, body, state, forces, energy, hourglassEnergy, gather, withEnergy,
-                                         withHourglass);
-    else
-      detail::launchOnePointForces<false>(space, body, state, forces, energy, hourglassEnergy, gather, withEnergy,
-                                          withHourglass);
-    if (!gather) return;
-    Kokkos::parallel_for(
-        "perishell::shell::gatherOnePointShellForces",
-        queuedRangePolicy(space, 0, static_cast<LocalIndex>(body.nodeElementOffsets.extent(0) - 1)),
-        KOKKOS_LAMBDA(const LocalIndex node) {
-          const RowOffset begin = body.nodeElementOffsets(node), end = body.nodeElementOffsets(node + 1);
-          if (begin == end) return;
-          double sum[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, strain = 0.0, hourglass = 0.0;
-          for (RowOffset k = begin; k < end; ++k) {
-            const LocalIndex entry = body.nodeElementEntries(k), e = entry / 4, corner = entry % 4;
-            for (int d = 0; d < 6; ++d) sum[d] += body.elementForces(e, 6 * corner + d);
-            strain += body.elementForces(e, 24);
-            hourglass += body.elementForces(e, 25);
-          }
-          for (int d = 0; d < 6; ++d) forces(node, d) -= sum[d];
-          if (withEnergy) energy(node) += strain;
-          if (withHourglass) hourglassEnergy(node) += hourglass;
-        });
-    return;
-  }
-  Kokkos::parallel_for(
-      "perishell::shell::subtractShellForces", queuedRangePolicy(space, 0, body.numElements()),
-      KOKKOS_LAMBDA(const LocalIndex e) {
-        double reference[4][3], current[4][3], rotations[4][3][3];
-        detail::loadElement(body, state, e, reference, current, rotations);
-        // A triangle works on its 3 nodes: 18 DOF, not the collapsed quad's 24.
-        if (mesh::isTriangle(body.quads, e))
-          detail::subtractElementForce<3>(body, e, reference, current, rotations, forces, energy);
-        else
-          detail::subtractElementForce<4>(body, e, reference, current, rotations, forces, energy);
-      });
+  subtractSelectedShellForces(space, body, ElementSelection<MemorySpaceT>::every(), state, forces, energy,
+                              hourglassEnergy);
+  gatherShellForces(space, body, forces, energy, hourglassEnergy);
 }
 
 // Per node, the elements' diagonal stiffness: the mean of the three translational and of the

@@ -129,7 +129,7 @@ class CentralDifferenceSolver {
         dampingWork_("pd damping work", body_.numNodes()),
         kineticEnergy_("pd kinetic energy", body_.numNodes()) {
     validate();
-    ownedWork_ = ownedWorkOf(body_, shell_);
+    stepWork_ = stepWorkOf(body_, shell_);
     inertia_ = computeNodalInertia(space_, body_, shell_, options_.density, options_.thickness);
     assembly::weighInertiaByShare(space_, actions_.mirrorImages, inertia_.mass, inertia_.rotaryInertia);
     applyInitialSupportValues();
@@ -146,16 +146,24 @@ class CentralDifferenceSolver {
   }
 
   // Advances one step; every monitorEvery steps (and on the first) checks the energy
-  // balance and throws ExplicitInstability on non-finite or runaway energy.
+  // balance and throws ExplicitInstability on non-finite or runaway energy. On many ranks the
+  // step ends with the halo exchange started, and the next step's interior forces run while
+  // its messages travel (docs/parallel.md, "Overlap"): between steps the owned rows are
+  // current, the halo rows once finishHaloExchange() has run (energies() runs it).
   void step() {
     const bool monitor = step_ % options_.monitorEvery == 0;
     auto phaseStart = std::chrono::steady_clock::now();
-    computeForces(monitor);
+    const pd::BondForceOutputs<MemorySpace> outputs = stepOutputs(monitor);
+    addInteriorForces(state_, outputs);
+    timePhase(phaseSeconds_.forces, phaseStart);
+    finishHaloExchange();
+    timePhase(phaseSeconds_.exchange, phaseStart);
+    addBoundaryForces(state_, outputs);
     timePhase(phaseSeconds_.forces, phaseStart);
     std::swap(intact_, intactNext_);
     advance(monitor);
     timePhase(phaseSeconds_.integration, phaseStart);
-    exchangeHalo();
+    startHaloExchange();
     timePhase(phaseSeconds_.exchange, phaseStart);
     if (monitor) {
       checkEnergy();
@@ -175,7 +183,10 @@ class CentralDifferenceSolver {
       discardedFracture_ = VectorView<MemorySpace>("pd fracture energy scratch", body_.numNodes());
       discardedFlags_ = pd::BondFlagView<MemorySpace>("intact bonds scratch", body_.bonds.numBonds());
     }
-    addInternalForces(state_, {forces_, strainEnergy_, discardedFracture_, discardedFlags_});
+    const pd::BondForceOutputs<MemorySpace> outputs{forces_, strainEnergy_, discardedFracture_, discardedFlags_};
+    addInteriorForces(state_, outputs);
+    finishHaloExchange();
+    addBoundaryForces(state_, outputs);
     return reduceEnergies(kineticAtHalfSteps());
   }
 
@@ -223,7 +234,7 @@ class CentralDifferenceSolver {
     discardedFracture_ = VectorView<MemorySpace>();
     discardedFlags_ = pd::BondFlagView<MemorySpace>();
     validate();
-    ownedWork_ = ownedWorkOf(body_, shell_);
+    stepWork_ = stepWorkOf(body_, shell_);
     inertia_ = computeNodalInertia(space_, body_, shell_, options_.density, options_.thickness);
     assembly::weighInertiaByShare(space_, actions_.mirrorImages, inertia_.mass, inertia_.rotaryInertia);
     criticalTimeStep_ = std::min(criticalTimeStep_, estimateCriticalTimeStep(80, withNeighbours(changedNodes)));
@@ -266,6 +277,7 @@ class CentralDifferenceSolver {
   void restoreFrom(const io::Checkpoint& checkpoint, const parallel::NodeGather& gather) {
     const std::string mismatch = "the deck's model is not the one the checkpoint's run solved (another mesh, zones or "
                                  "horizon)";
+    finishHaloExchange();  // so that no exchange of the old state lands on the restored one
     parallel::takeNodalView(checkpoint, "explicit.displacements", state_.displacements, gather, mismatch);
     parallel::takeNodalView(checkpoint, "explicit.rotations", state_.rotations, gather, mismatch);
     parallel::takeNodalView(checkpoint, "explicit.velocities", velocities_, gather, mismatch);
@@ -303,7 +315,11 @@ class CentralDifferenceSolver {
   const parallel::NodeDistribution<MemorySpace>& distribution() const { return distribution_; }
   // What a step's halo exchange sends per node: displacement, rotation and velocity.
   static constexpr int haloDoublesPerNode = 3 + 4 + 6;
-  void exchangeHalo() { distribution_.exchange(space_, state_.displacements, state_.rotations, velocities_); }
+  // Completes the exchange the last step started, if any: the halo rows take their owners'
+  // state. Collective.
+  void finishHaloExchange() {
+    distribution_.finishExchange(space_, state_.displacements, state_.rotations, velocities_);
+  }
 
   // Over every rank: a bond counts on the rank that owns its first node.
   long long brokenBonds() const {
@@ -429,23 +445,50 @@ class CentralDifferenceSolver {
     assembly::imposeMirrorImages(space_, actions_.mirrorImages, displacements, rotations, actions_.prescribedAt(0.0, 1.0));
   }
 
-  void computeForces(bool withStrainEnergy) {
+  // A step's outputs, zeroed: forces, and the strain and hourglass energies on a monitor step.
+  pd::BondForceOutputs<MemorySpace> stepOutputs(bool withStrainEnergy) {
     fillContiguous(space_, forces_, 0.0);
     if (withStrainEnergy) {
       Kokkos::deep_copy(space_, strainEnergy_, 0.0);
       Kokkos::deep_copy(space_, hourglassEnergy_, 0.0);
     }
-    const pd::BondForceOutputs<MemorySpace> outputs{
-        forces_, withStrainEnergy ? strainEnergy_ : VectorView<MemorySpace>(), fractureEnergy_, intactNext_};
-    addInternalForces(state_, outputs);
+    return {forces_, withStrainEnergy ? strainEnergy_ : VectorView<MemorySpace>(), fractureEnergy_, intactNext_};
   }
+
+  void startHaloExchange() { distribution_.startExchange(space_, state_.displacements, state_.rotations, velocities_); }
 
   // The forces bonds and elements exert on the nodes in `state`, added into outputs.forces;
   // their strain energy into outputs.strainEnergy unless it is empty, and then the
-  // elements' hourglass energy into hourglassEnergy_.
-  void addInternalForces(const pd::PdKinematics<MemorySpace>& state, const pd::BondForceOutputs<MemorySpace>& outputs) {
-    addInternalForces(ownedWork_.body ? *ownedWork_.body : body_, ownedWork_.shell ? ownedWork_.shell : shell_,
-                      options_.forceKernel, state, outputs);
+  // elements' hourglass energy into hourglassEnergy_. In two calls, with finishHaloExchange()
+  // between them: first the work that reads no node the exchange writes (on one rank, all of
+  // it), then the rest (stepWorkOf).
+  void addInteriorForces(const pd::PdKinematics<MemorySpace>& state,
+                         const pd::BondForceOutputs<MemorySpace>& outputs) {
+    if (!distribution_.distributed()) {
+      addInternalForces(body_, shell_, options_.forceKernel, state, outputs);
+      return;
+    }
+    if (stepWork_.interiorBonds)
+      pd::computeBondForces(space_, options_.forceKernel, *stepWork_.interiorBonds, state, intact_, outputs);
+    if (stepWork_.shell)
+      shell::subtractSelectedShellForces(space_, *stepWork_.shell, ElementSelection::only(stepWork_.interiorElements),
+                                         state, outputs.forces, outputs.strainEnergy, hourglassOutput(outputs));
+  }
+  void addBoundaryForces(const pd::PdKinematics<MemorySpace>& state,
+                         const pd::BondForceOutputs<MemorySpace>& outputs) {
+    if (!distribution_.distributed()) return;
+    if (stepWork_.boundaryBonds)
+      pd::computeBondForces(space_, options_.forceKernel, *stepWork_.boundaryBonds, state, intact_, outputs);
+    if (stepWork_.shell) {
+      shell::subtractSelectedShellForces(space_, *stepWork_.shell, ElementSelection::only(stepWork_.boundaryElements),
+                                         state, outputs.forces, outputs.strainEnergy, hourglassOutput(outputs));
+      shell::gatherShellForces(space_, *stepWork_.shell, outputs.forces, outputs.strainEnergy,
+                               hourglassOutput(outputs));
+    }
+    assembly::condenseImageForces(space_, actions_.mirrorImages, outputs.forces);
+  }
+  VectorView<MemorySpace> hourglassOutput(const pd::BondForceOutputs<MemorySpace>& outputs) const {
+    return outputs.strainEnergy.extent(0) > 0 ? hourglassEnergy_ : VectorView<MemorySpace>();
   }
 
   // The same over given bodies (the local critical-step estimate's patch of this model's).
@@ -950,29 +993,49 @@ class CentralDifferenceSolver {
   // - with node-gather, the bond rows of the read nodes and of the lower node of each of their
   //   bonds: that row alone writes the bond's broken flag (pd/bond_forces.hpp). Bond-scatter
   //   visits every bond anyway.
-  // Empty members on one rank: the step evaluates the whole bodies.
-  struct OwnedWork {
-    std::optional<pd::PdBody<MemorySpace>> body;
+  // Each in two parts (docs/parallel.md, "Overlap"): the interior, bond rows and elements that
+  // read no node the exchange writes, runs while the exchange is in flight; the boundary after
+  // it. A node's bond row is whole in one part and the gather sums every element of a node
+  // after both, so each node's sums are those of one rank, to the bit. Bond-scatter bonds all
+  // wait for the exchange. Empty on one rank: the step evaluates the whole bodies.
+  using ElementSelection = shell::ElementSelection<MemorySpace>;
+  struct StepWork {
+    std::optional<pd::PdBody<MemorySpace>> interiorBonds, boundaryBonds;
     std::optional<shell::ShellBody<MemorySpace>> shell;
+    Kokkos::View<LocalIndex*, MemorySpace> interiorElements, boundaryElements;  // into *shell
   };
-  OwnedWork ownedWorkOf(const pd::PdBody<MemorySpace>& body,
-                        const std::optional<shell::ShellBody<MemorySpace>>& shell) const {
+  StepWork stepWorkOf(const pd::PdBody<MemorySpace>& body,
+                      const std::optional<shell::ShellBody<MemorySpace>>& shell) const {
     if (!distribution_.distributed()) return {};
     const auto owned = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, distribution_.owned());
+    const auto slots = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, distribution_.ownerSlots());
     const auto images = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.mirrorImages.nodes);
     const auto masters = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.mirrorImages.masters);
     const LocalIndex numNodes = body.numNodes();
+    const auto received = [&slots](LocalIndex node) { return slots(node) > 0; };
     Kokkos::View<std::uint8_t*, Kokkos::HostSpace> read("nodes whose forces a step reads", numNodes);
     for (LocalIndex node = 0; node < numNodes; ++node) read(node) = owned(node);
     for (std::size_t k = 0; k < images.extent(0); ++k)
       if (owned(masters(k))) read(images(k)) = 1;
-    OwnedWork work;
+    StepWork work;
     if (shell) {
       const Kokkos::View<const std::uint8_t*, MemorySpace> readMask =
           Kokkos::create_mirror_view_and_copy(MemorySpace{}, read);
       work.shell = shell::selectElements(space_, *shell, readMask);
+      const auto quads = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, work.shell->quads);
+      std::vector<LocalIndex> interior, boundary;
+      for (LocalIndex e = 0; e < work.shell->numElements(); ++e) {
+        bool waits = false;
+        for (int a = 0; a < 4; ++a) waits = waits || received(quads(e, a));
+        (waits ? boundary : interior).push_back(e);
+      }
+      work.interiorElements = toDevice(interior, "interior shell elements");
+      work.boundaryElements = toDevice(boundary, "boundary shell elements");
     }
-    if (options_.forceKernel != deck::ForceKernel::NodeGather) return work;
+    if (options_.forceKernel != deck::ForceKernel::NodeGather) {
+      work.boundaryBonds = body;
+      return work;
+    }
     const auto offsets = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.bonds.offsets);
     const auto neighbours = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.bonds.neighbours);
     Kokkos::View<std::uint8_t*, Kokkos::HostSpace> evaluated("bond rows a step evaluates", numNodes);
@@ -982,11 +1045,30 @@ class CentralDifferenceSolver {
       for (RowOffset entry = offsets(node); entry < offsets(node + 1); ++entry)
         if (neighbours(entry) < node) evaluated(neighbours(entry)) = 1;
     }
-    const Kokkos::View<const std::uint8_t*, MemorySpace> rows =
-        Kokkos::create_mirror_view_and_copy(MemorySpace{}, evaluated);
-    work.body = body;
-    work.body->bonds = pd::restrictRows(space_, body.bonds, rows);
+    Kokkos::View<std::uint8_t*, Kokkos::HostSpace> interiorRows("interior bond rows", numNodes),
+        boundaryRows("boundary bond rows", numNodes);
+    for (LocalIndex node = 0; node < numNodes; ++node) {
+      if (!evaluated(node)) continue;
+      bool waits = received(node);
+      for (RowOffset entry = offsets(node); entry < offsets(node + 1); ++entry)
+        waits = waits || received(neighbours(entry));
+      (waits ? boundaryRows : interiorRows)(node) = 1;
+    }
+    const auto restricted = [&](const Kokkos::View<std::uint8_t*, Kokkos::HostSpace>& rows) {
+      pd::PdBody<MemorySpace> part = body;
+      part.bonds = pd::restrictRows(space_, body.bonds, Kokkos::View<const std::uint8_t*, MemorySpace>(
+                                                            Kokkos::create_mirror_view_and_copy(MemorySpace{}, rows)));
+      return part;
+    };
+    work.interiorBonds = restricted(interiorRows);
+    work.boundaryBonds = restricted(boundaryRows);
     return work;
+  }
+  static Kokkos::View<LocalIndex*, MemorySpace> toDevice(const std::vector<LocalIndex>& values, const char* label) {
+    Kokkos::View<LocalIndex*, MemorySpace> view(std::string(label), values.size());
+    Kokkos::deep_copy(view, Kokkos::View<const LocalIndex*, Kokkos::HostSpace, Kokkos::MemoryUnmanaged>(
+                                values.data(), values.size()));
+    return view;
   }
 
   // With timePhases: fences, adds the time since `start` to `total` and restarts `start`.
@@ -999,7 +1081,7 @@ class CentralDifferenceSolver {
   ExecutionSpaceT space_;
   parallel::NodeDistribution<MemorySpace> distribution_;
   pd::PdBody<MemorySpace> body_;
-  OwnedWork ownedWork_;  // ownedWorkOf(body_, shell_)
+  StepWork stepWork_;  // stepWorkOf(body_, shell_)
   std::optional<shell::ShellBody<MemorySpace>> shell_;
   ExternalActions<MemorySpace> actions_;
   ExplicitOptions options_;
