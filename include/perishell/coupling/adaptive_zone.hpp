@@ -71,8 +71,13 @@ class AdaptivePdZone {
       if (isPdNode[node]) nodes(k++) = node;
     return nodes;
   }
-  // Per mesh node, 1 where the last switch changed alpha: the bonds, hybrid sections and
-  // inertia changed there and nowhere else (the solver re-estimates its critical step there).
+  // Per mesh node, 1 where the last switch changed alpha or alphaBar, or a switched element has
+  // a corner. Only these nodes' neighbours by a bond (whose bonds' morphing (alpha_i +
+  // alpha_j)/2 changed) or an element (whose hybrid section 1 - alphaBar, or membership of the
+  // shell body, changed) saw their bonds, elements and inertia change: the solver re-estimates
+  // its critical step, inertia and energy there (CentralDifferenceSolver::replaceBodies).
+  // alphaBar, a bond-weighted mean over a node's bonds, changes a horizon beyond alpha; a
+  // corner whose alpha and alphaBar were 1 already still loses the element's shell stiffness.
   const Kokkos::View<std::uint8_t*, Memory>& changedNodes() const { return changedNodes_; }
   double criticalStretch() const { return criticalStretch_; }
   double threshold() const { return threshold_; }
@@ -90,16 +95,18 @@ class AdaptivePdZone {
       if (!elementIsPd_(bodies_.ccmElements[k]) && strain(k) >= threshold_) reached.push_back(k);
     const auto near = withinMargin(reached);
     LocalIndex switched = 0;
+    Kokkos::View<std::uint8_t*, Kokkos::HostSpace> corners("adaptive switched corners", mesh_.numNodes());
     for (std::size_t k = 0; k < bodies_.ccmElements.size(); ++k) {
       const LocalIndex element = bodies_.ccmElements[k];
       if (!elementIsPd_(element) && near(k) > 0.0) {
         elementIsPd_(element) = 1;
         ++switched;
+        for (int a = 0; a < 4; ++a) corners(mesh_.quads(element, a)) = 1;
       }
     }
-    const auto previousAlpha = bodies_.alpha;
+    const auto previousAlpha = bodies_.alpha, previousAlphaBar = bodies_.alphaBar;
     rebuild();
-    markChangedNodes(previousAlpha);
+    markChangedNodes(previousAlpha, previousAlphaBar, Kokkos::create_mirror_view_and_copy(Memory{}, corners));
     return switched;
   }
 
@@ -118,13 +125,16 @@ class AdaptivePdZone {
   }
 
   // Public only because nvcc rejects extended lambdas in private member functions.
-  void markChangedNodes(const VectorView<Memory>& previousAlpha) {
-    const auto alpha = bodies_.alpha;
+  void markChangedNodes(const VectorView<Memory>& previousAlpha, const VectorView<Memory>& previousAlphaBar,
+                        const Kokkos::View<std::uint8_t*, Memory>& switchedCorners) {
+    const auto alpha = bodies_.alpha, alphaBar = bodies_.alphaBar;
     const auto changed = changedNodes_;
     Kokkos::parallel_for(
         "perishell::coupling::AdaptivePdZone::markChangedNodes",
-        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, alpha.extent(0)),
-        KOKKOS_LAMBDA(const LocalIndex node) { changed(node) = alpha(node) != previousAlpha(node) ? 1 : 0; });
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, alpha.extent(0)), KOKKOS_LAMBDA(const LocalIndex node) {
+          const bool morphed = alpha(node) != previousAlpha(node) || alphaBar(node) != previousAlphaBar(node);
+          changed(node) = morphed || switchedCorners(node) ? 1 : 0;
+        });
   }
 
  private:

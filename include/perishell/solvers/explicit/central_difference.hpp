@@ -218,14 +218,19 @@ class CentralDifferenceSolver {
   // from the estimate is lowered to safetyFactor x the new estimate when needed; a fixed one
   // above the new critical step throws ExplicitInstability.
   //
-  // changedNodes (per node, 1 where the bodies changed) confines the new estimate to the
-  // change: estimateCriticalTimeStep's patch is those nodes and their bond and element
-  // neighbours, whose rows of K changed with them. The critical step is the lower of the old
-  // one and this local estimate, so it never rises.
+  // changedNodes (per node, 1 where the bodies changed) confines the work to the change: the
+  // patch is those nodes and their bond and element neighbours in the old and the new bodies,
+  // whose rows of K, inertia and energies changed with them; outside it nothing does. So the
+  // new estimate runs on the patch (estimateCriticalTimeStep), the nodal inertia is
+  // recomputed there, and the energy jump is the patch's. The critical step is the lower of
+  // the old one and the local estimate, so it never rises.
   void replaceBodies(pd::PdBody<MemorySpace> body, std::optional<shell::ShellBody<MemorySpace>> shellBody,
                      const Kokkos::View<const std::uint8_t*, MemorySpace>& changedNodes) {
     requireSingleRank("an adaptive PD zone");
-    const double before = energies().stored();
+    Kokkos::View<std::uint8_t*, MemorySpace> patchNodes("changed nodes and neighbours", body_.numNodes());
+    addNeighbours(changedNodes, body_.bonds, shell_, patchNodes);
+    addNeighbours(changedNodes, body.bonds, shellBody, patchNodes);
+    const double before = patchEnergy(patchOf(patchNodes), intact_);
     intact_ = fracture::carryBrokenBonds(space_, body_.bonds, intact_, body.bonds);
     intactNext_ = pd::makeIntactFlags(body.bonds, "intact bonds next");
     Kokkos::deep_copy(space_, intactNext_, intact_);
@@ -235,10 +240,10 @@ class CentralDifferenceSolver {
     discardedFlags_ = pd::BondFlagView<MemorySpace>();
     validate();
     stepWork_ = stepWorkOf(body_, shell_);
-    inertia_ = computeNodalInertia(space_, body_, shell_, options_.density, options_.thickness);
-    assembly::weighInertiaByShare(space_, actions_.mirrorImages, inertia_.mass, inertia_.rotaryInertia);
-    criticalTimeStep_ = std::min(criticalTimeStep_, estimateCriticalTimeStep(80, withNeighbours(changedNodes)));
-    initialEnergy_ += energies().stored() - before;
+    const Patch patch = patchOf(patchNodes);
+    updateInertiaOn(patch);
+    criticalTimeStep_ = std::min(criticalTimeStep_, estimateCriticalTimeStep(80, &patch));
+    initialEnergy_ += patchEnergy(patch, intact_) - before;
     // A step chosen from the estimate follows it down; one the deck fixed must stay below it.
     if (options_.timeStep <= 0.0) timeStep_ = std::min(timeStep_, options_.safetyFactor * criticalTimeStep_);
     if (timeStep_ > criticalTimeStep_) {
@@ -653,6 +658,16 @@ class CentralDifferenceSolver {
     throw ExplicitInstability(message.str());
   }
 
+  // Part of the model: its nodes (per node, 1 in it), the bond rows of those nodes and the
+  // elements touching them, out of the current bodies. Each of its nodes has all its bonds
+  // and elements there, in their order, so per-node sums over it (forces, strain energy,
+  // nodal stiffness) are the whole model's to the bit; node-gather evaluates only the rows it
+  // is given (bond-scatter would visit every bond).
+  struct Patch {
+    Kokkos::View<const std::uint8_t*, MemorySpace> nodes;
+    pd::PdBody<MemorySpace> body;
+    std::optional<shell::ShellBody<MemorySpace>> shell;
+  };
   // dt_crit = 2 / omega_max, omega_max^2 the largest eigenvalue of A = M^-1/2 K M^-1/2 with K
   // the tangent of the bond and element forces at the reference state. Lanczos: each product
   // A q is a force evaluation at a tiny trial state q/sqrt(M) (amplitude 1e-7 of the horizon).
@@ -663,7 +678,7 @@ class CentralDifferenceSolver {
   // iteration used to take, always). The estimate needs no more: dt = safetyFactor x dt_crit
   // leaves omega_max^2 23 % of room at the default 0.9 (docs/explicit.md, "Critical step").
   //
-  // startSupport (per node; empty: every node) confines the estimate to a patch: after a local
+  // A patch (patchOf; none: every node) confines the estimate to its nodes: after a local
   // change of the bodies the new top of the spectrum, if any, lies there. Lanczos then runs on
   // the patch's block of A (the support's DOFs, the rest held at zero), whose products
   // evaluate only the patch's bonds and elements. By Cauchy interlacing its top is at most the
@@ -672,8 +687,9 @@ class CentralDifferenceSolver {
   // after 31 products, then 0.17 % more by the 80th; 1e-6 took all 80 there (1 s of its 5.8 s
   // on 2 threads).
   static constexpr double settledRitzChange = 1e-4;
-  double estimateCriticalTimeStep(int maxProducts = 80,
-                                  const Kokkos::View<const std::uint8_t*, MemorySpace>& startSupport = {}) {
+  double estimateCriticalTimeStep(int maxProducts = 80, const Patch* patch = nullptr) {
+    const Kokkos::View<const std::uint8_t*, MemorySpace> startSupport =
+        patch ? patch->nodes : Kokkos::View<const std::uint8_t*, MemorySpace>();
     const LocalIndex numNodes = body_.numNodes();
     pd::NodalVectorView<MemorySpace> q("lanczos q", numNodes), previous("lanczos previous q", numNodes),
         product("lanczos A q", numNodes);
@@ -686,11 +702,9 @@ class CentralDifferenceSolver {
                          options_.forceKernel,
                          startSupport,
                          {}};
-    if (startSupport.extent(0) > 0) {
-      // The patch: the support's rows of bonds and the elements touching it (node-gather
-      // evaluates only the rows it is given; bond-scatter would visit every bond).
-      scratch.body.bonds = pd::restrictRows(space_, body_.bonds, startSupport);
-      if (shell_) scratch.shell = shell::selectElements(space_, *shell_, startSupport);
+    if (patch) {
+      scratch.body = patch->body;
+      scratch.shell = patch->shell;
       scratch.kernel = deck::ForceKernel::NodeGather;
       scratch.nodes = productNodes(startSupport);
     }
@@ -750,27 +764,77 @@ class CentralDifferenceSolver {
   Kokkos::View<const std::uint8_t*, MemorySpace> withNeighbours(
       const Kokkos::View<const std::uint8_t*, MemorySpace>& nodes) const {
     Kokkos::View<std::uint8_t*, MemorySpace> grown("changed nodes and neighbours", nodes.extent(0));
-    const auto bonds = body_.bonds;
+    addNeighbours(nodes, body_.bonds, shell_, grown);
+    return grown;
+  }
+  // Marks in `grown` the nodes marked in `nodes` and those sharing a bond of `bonds` or an
+  // element of `shell` with one (leaves other marks as they are).
+  void addNeighbours(const Kokkos::View<const std::uint8_t*, MemorySpace>& nodes, const pd::BondList<MemorySpace>& bonds,
+                     const std::optional<shell::ShellBody<MemorySpace>>& shell,
+                     const Kokkos::View<std::uint8_t*, MemorySpace>& grown) const {
     Kokkos::parallel_for(
         "perishell::solvers::CentralDifferenceSolver::bondNeighbours",
         Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, bonds.numNodes()), KOKKOS_LAMBDA(const LocalIndex node) {
           bool near = nodes(node) != 0;
           for (RowOffset entry = bonds.offsets(node); entry < bonds.offsets(node + 1) && !near; ++entry)
             near = nodes(bonds.neighbours(entry)) != 0;
-          grown(node) = near ? 1 : 0;
+          if (near) grown(node) = 1;
         });
-    if (shell_) {
-      const auto quads = shell_->quads;
+    if (shell) {
+      const auto quads = shell->quads;
       Kokkos::parallel_for(
           "perishell::solvers::CentralDifferenceSolver::elementNeighbours",
-          Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, shell_->numElements()), KOKKOS_LAMBDA(const LocalIndex e) {
+          Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, shell->numElements()), KOKKOS_LAMBDA(const LocalIndex e) {
             bool touches = false;
             for (int a = 0; a < 4; ++a) touches = touches || nodes(quads(e, a)) != 0;
             if (touches)
               for (int a = 0; a < 4; ++a) Kokkos::atomic_assign(&grown(quads(e, a)), std::uint8_t(1));
           });
     }
-    return grown;
+  }
+
+  Patch patchOf(const Kokkos::View<const std::uint8_t*, MemorySpace>& nodes) const {
+    Patch patch{nodes, body_, std::nullopt};
+    patch.body.bonds = pd::restrictRows(space_, body_.bonds, nodes);
+    if (shell_) patch.shell = shell::selectElements(space_, *shell_, nodes);
+    return patch;
+  }
+
+  // The nodal inertia (solvers/explicit/nodal_inertia.hpp) of the patch's nodes, from their
+  // bonds and elements; the other nodes keep theirs.
+  void updateInertiaOn(const Patch& patch) {
+    const auto fresh = computeNodalInertia(space_, patch.body, patch.shell, options_.density, options_.thickness);
+    assembly::weighInertiaByShare(space_, actions_.mirrorImages, fresh.mass, fresh.rotaryInertia);
+    const auto nodes = patch.nodes;
+    const auto mass = inertia_.mass, rotaryInertia = inertia_.rotaryInertia;
+    Kokkos::parallel_for(
+        "perishell::solvers::CentralDifferenceSolver::updateInertiaOn",
+        Kokkos::RangePolicy<ExecutionSpaceT>(space_, 0, nodes.extent(0)), KOKKOS_LAMBDA(const LocalIndex node) {
+          if (!nodes(node)) return;
+          mass(node) = fresh.mass(node);
+          rotaryInertia(node) = fresh.rotaryInertia(node);
+        });
+  }
+
+  // The strain and kinetic energy of the patch's nodes in the current state, with the given
+  // bonds intact: the part of energies().stored() a change of bodies inside the patch can
+  // change (fracture and damping are accumulated, not evaluated).
+  double patchEnergy(const Patch& patch, const pd::BondFlagView<MemorySpace>& intact) {
+    const LocalIndex numNodes = body_.numNodes();
+    fillContiguous(space_, forces_, 0.0);
+    Kokkos::deep_copy(space_, strainEnergy_, 0.0);
+    const pd::BondForceOutputs<MemorySpace> outputs{
+        forces_, strainEnergy_, VectorView<MemorySpace>("patch fracture energy scratch", numNodes),
+        pd::BondFlagView<MemorySpace>("patch bonds scratch", intact.extent(0))};
+    if (patch.body.bonds.numBonds() > 0)
+      pd::computeBondForces(space_, deck::ForceKernel::NodeGather, patch.body, state_, intact, outputs);
+    if (patch.shell) shell::subtractShellForces(space_, *patch.shell, state_, forces_, strainEnergy_);
+    const auto kinetic = kineticAtHalfSteps();
+    const auto nodes = patch.nodes;
+    const auto strain = strainEnergy_;
+    return parallel::reproducibleSum(
+        space_, numNodes, KOKKOS_LAMBDA(const std::size_t i)->double { return nodes(i) ? strain(i) + kinetic(i) : 0.0; },
+        distribution_.communicator(), numNodes);
   }
 
   // What a trial force evaluation writes besides the forces (discarded), and what it
