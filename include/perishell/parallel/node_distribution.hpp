@@ -70,6 +70,8 @@ class NodeDistribution {
   const std::vector<int>& neighbourRanks() const { return ranks_; }
   const std::vector<std::vector<LocalIndex>>& sendLists() const { return sendLists_; }
   const std::vector<std::vector<LocalIndex>>& receiveLists() const { return receiveLists_; }
+  // The local nodes the exchange writes (every neighbour's receive list, flattened).
+  Kokkos::View<const LocalIndex*, MemorySpaceT> receivedNodes() const { return receiveNodes_; }
   // Per local node: 0 where this rank owns it, 1 + k where neighbourRanks()[k] owns it (a halo
   // node the exchange fills), -1 for the rest of the halo; empty on a single rank.
   const Kokkos::View<int*, MemorySpaceT>& ownerSlots() const { return ownerSlots_; }

@@ -101,13 +101,37 @@ void updateNodeFrames(const ExecutionSpaceT& space, const PdBody<MemorySpaceT>& 
       });
 }
 
+// The same for the listed nodes only (the others' frames are current): a distributed step
+// refreshes the halo nodes its exchange just wrote (solvers/explicit/central_difference.hpp).
+template <class ExecutionSpaceT, class MemorySpaceT>
+void updateNodeFrames(const ExecutionSpaceT& space, const PdBody<MemorySpaceT>& body,
+                      const PdKinematics<MemorySpaceT>& state, const Kokkos::View<const LocalIndex*, MemorySpaceT>& nodes) {
+  static_assert(is_execution_space_v<ExecutionSpaceT>);
+  constexpr RowOffset entriesPerNode = 12;
+  Kokkos::parallel_for(
+      "perishell::pd::updateListedNodeFrames",
+      queuedRangePolicy(space, RowOffset(0), entriesPerNode * static_cast<RowOffset>(nodes.extent(0))),
+      KOKKOS_LAMBDA(const RowOffset index) {
+        const LocalIndex node = nodes(static_cast<std::size_t>(index / entriesPerNode));
+        const int entry = static_cast<int>(index % entriesPerNode);
+        state.nodeFrames(node, entry) =
+            entry < 3 ? body.referencePositions(node, entry) + state.displacements(node, entry)
+                      : rotation::matrixEntry([&](int k) { return state.rotations(node, k); }, (entry - 3) / 3,
+                                               (entry - 3) % 3);
+      });
+}
+
+// Whether computeBondForces first brings every node's frame up to date (updateNodeFrames), or
+// the caller did (a step evaluating its bonds in parts, each over current frames).
+enum class NodeFrames { Update, Current };
+
 template <class ExecutionSpaceT, class MemorySpaceT>
 void computeBondForces(const ExecutionSpaceT& space, deck::ForceKernel kernel, const PdBody<MemorySpaceT>& body,
                        const PdKinematics<MemorySpaceT>& state, const BondFlagView<MemorySpaceT>& intact,
-                       const BondForceOutputs<MemorySpaceT>& out) {
+                       const BondForceOutputs<MemorySpaceT>& out, NodeFrames frames = NodeFrames::Update) {
   static_assert(is_execution_space_v<ExecutionSpaceT>);
   const bool withStrainEnergy = out.strainEnergy.extent(0) > 0;
-  updateNodeFrames(space, body, state);
+  if (frames == NodeFrames::Update) updateNodeFrames(space, body, state);
   if (kernel == deck::ForceKernel::BondScatter) {
     Kokkos::parallel_for(
         "perishell::pd::computeBondForces::bondScatter",
@@ -144,6 +168,8 @@ void computeBondForces(const ExecutionSpaceT& space, deck::ForceKernel kernel, c
   Kokkos::parallel_for(
       "perishell::pd::computeBondForces::nodeGather",
       Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, body.numNodes()), KOKKOS_LAMBDA(const LocalIndex node) {
+        // A row left out (pd::restrictRows) adds nothing: skip loading its node.
+        if (body.bonds.offsets(node) == body.bonds.offsets(node + 1)) return;
         MicrobeamEnd self, other;
         detail::loadFramedBondEnd(body, state, node, self);
         double sum[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};

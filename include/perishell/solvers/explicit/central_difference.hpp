@@ -473,8 +473,12 @@ class CentralDifferenceSolver {
       addInternalForces(body_, shell_, options_.forceKernel, state, outputs);
       return;
     }
-    if (stepWork_.interiorBonds)
-      pd::computeBondForces(space_, options_.forceKernel, *stepWork_.interiorBonds, state, intact_, outputs);
+    if (body_.bonds.numBonds() > 0) {
+      pd::updateNodeFrames(space_, body_, state);
+      if (stepWork_.interiorBonds)
+        pd::computeBondForces(space_, options_.forceKernel, *stepWork_.interiorBonds, state, intact_, outputs,
+                              pd::NodeFrames::Current);
+    }
     if (stepWork_.shell)
       shell::subtractSelectedShellForces(space_, *stepWork_.shell, ElementSelection::only(stepWork_.interiorElements),
                                          state, outputs.forces, outputs.strainEnergy, hourglassOutput(outputs));
@@ -482,8 +486,13 @@ class CentralDifferenceSolver {
   void addBoundaryForces(const pd::PdKinematics<MemorySpace>& state,
                          const pd::BondForceOutputs<MemorySpace>& outputs) {
     if (!distribution_.distributed()) return;
-    if (stepWork_.boundaryBonds)
-      pd::computeBondForces(space_, options_.forceKernel, *stepWork_.boundaryBonds, state, intact_, outputs);
+    if (body_.bonds.numBonds() > 0) {
+      // The frames are current but for the halo nodes the exchange just wrote.
+      pd::updateNodeFrames(space_, body_, state, distribution_.receivedNodes());
+      if (stepWork_.boundaryBonds)
+        pd::computeBondForces(space_, options_.forceKernel, *stepWork_.boundaryBonds, state, intact_, outputs,
+                              pd::NodeFrames::Current);
+    }
     if (stepWork_.shell) {
       shell::subtractSelectedShellForces(space_, *stepWork_.shell, ElementSelection::only(stepWork_.boundaryElements),
                                          state, outputs.forces, outputs.strainEnergy, hourglassOutput(outputs));
