@@ -38,7 +38,7 @@ bool ranksMayDiverge = false;
 
 constexpr const char* usage = R"(usage: perishell [--help] [--version] [--backend-info]
        perishell run DECK.yaml [--output DIR] [--backend device|host] [--max-steps N]
-                               [--restart DIR] [--phase-times]
+                               [--restart DIR] [--phase-times] [--exchange-overlap auto|on|off]
        perishell check DECK.yaml [--output DIR]
        perishell membrane [options]
 
@@ -66,6 +66,11 @@ Commands:
                       extend the run (more steps, a later end time).
       --phase-times   time the explicit step's phases (forces, integration, energy monitor)
                       with a synchronisation after each; implicit phases are always timed
+      --exchange-overlap M
+                      under mpirun, explicit: whether a step's forces run around its halo
+                      exchange (on) or after it (off); auto (default): off where ranks of a
+                      node share a GPU, which takes their kernels in turns, on elsewhere.
+                      The results are the same either way (docs/parallel.md, "Overlap")
   check DECK      Validate a case deck (docs/deck.md), build its model — mesh, zones, PD
                   nodes and, on the device, the bonds — and print a model summary: nodes,
                   elements, PD ratio, bonds, DOF counts. Exit 1 with the deck key and the
@@ -271,6 +276,11 @@ DeckArguments parseDeckArguments(const std::string& command, const std::vector<s
       parsed.run.restartDirectory = valueOf(i, "the output directory of the run to continue");
     } else if (isRun && args[i] == "--phase-times") {
       parsed.run.timePhases = true;
+    } else if (isRun && args[i] == "--exchange-overlap") {
+      const std::string& mode = valueOf(i, "auto, on or off");
+      if (mode == "on") parsed.run.exchangeOverlap = true;
+      else if (mode == "off") parsed.run.exchangeOverlap = false;
+      else if (mode != "auto") throw UsageError("option --exchange-overlap: '" + mode + "' is not auto, on or off");
     } else if (parsed.deckPath.empty() && args[i].rfind("--", 0) != 0) {
       parsed.deckPath = args[i];
     } else {

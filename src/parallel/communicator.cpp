@@ -1,5 +1,6 @@
 #include <perishell/parallel/communicator.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <limits>
 #include <numeric>
@@ -77,6 +78,19 @@ bool Communicator::any(bool value) const {
   int flag = value ? 1 : 0;
   if (size_ > 1) check(MPI_Allreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), "any");
   return flag != 0;
+}
+
+bool Communicator::anySharedOnNode(int value) const {
+  if (size_ == 1) return false;
+  MPI_Comm node;
+  check(MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &node), "split by node");
+  int nodeSize = 1;
+  MPI_Comm_size(node, &nodeSize);
+  std::vector<int> values(nodeSize);
+  check(MPI_Allgather(&value, 1, MPI_INT, values.data(), 1, MPI_INT, node), "gather on the node");
+  MPI_Comm_free(&node);
+  std::sort(values.begin(), values.end());
+  return any(std::adjacent_find(values.begin(), values.end()) != values.end());
 }
 
 std::string Communicator::broadcast(const std::string& text) const {
@@ -187,6 +201,7 @@ void Communicator::max(double*, int) const {}
 void Communicator::min(double*, int) const {}
 int Communicator::max(int value) const { return value; }
 bool Communicator::any(bool value) const { return value; }
+bool Communicator::anySharedOnNode(int) const { return false; }
 std::string Communicator::broadcast(const std::string& text) const { return text; }
 void Communicator::broadcast(std::vector<int>&) const {}
 std::vector<double> Communicator::gather(const std::vector<double>& values) const { return values; }

@@ -26,6 +26,19 @@
 namespace perishell::solvers {
 namespace {
 
+// Whether two ranks of a node run on one GPU (more ranks than GPUs, or a device id chosen
+// alike): their contexts take turns on it, so a step's exchange cannot overlap its forces
+// (ExplicitOptions::overlapExchange). Host backends share nothing. Collective.
+template <class ExecutionSpaceT>
+bool ranksShareDevice(const parallel::Communicator& communicator, const ExecutionSpaceT& space) {
+#ifdef KOKKOS_ENABLE_CUDA
+  if constexpr (std::is_same_v<ExecutionSpaceT, Kokkos::Cuda>) return communicator.anySharedOnNode(space.cuda_device());
+#endif
+  (void)communicator;
+  (void)space;
+  return false;
+}
+
 using HostVector3 = Kokkos::View<double* [3], Kokkos::LayoutRight, Kokkos::HostSpace>;
 
 // A node is on the crack when it has lost this share of its neighbour volume (docs/deck.md).
@@ -395,6 +408,7 @@ ExplicitRunSummary runExplicitOn(const ExecutionSpaceT& space, const model::Mode
   options.forceKernel = deck.peridynamics.forceKernel;
   options.monitorEvery = std::min<long long>(100, deck.output.historyEvery);
   options.timePhases = runOptions.timePhases;
+  options.overlapExchange = runOptions.exchangeOverlap.value_or(!ranksShareDevice(communicator, space));
   CentralDifferenceSolver<ExecutionSpaceT> solver(
       space, body, bodies.shellElements(), local ? local->actions : makeExternalActions<MemorySpace>(model), options,
       local ? local->distribution : parallel::NodeDistribution<MemorySpace>());

@@ -22,8 +22,11 @@ steps (increments), which ends in a checkpoint, and the next rank count in the l
 the first) continues it with --restart: the continued run's files are compared with the first
 rank count's uninterrupted run as above (bit for bit, or within TOL).
 
+--run-options "OPTS": more options for every run (e.g. "--exchange-overlap off").
+
 usage: compare_rank_counts.py --app PERISHELL --mpirun MPIRUN --deck DECK --work DIR [--ranks 1,2,3]
                               [--relative-tolerance TOL] [--max-krylov-growth G] [--restart-at N]
+                              [--run-options "OPTS"]
        compare_rank_counts.py --compare-only --deck DECK --work DIR [...]: compares the
                               directories DIR/ranks-N another machine wrote (a GPU run).
 """
@@ -83,6 +86,7 @@ def main():
     parser.add_argument("--relative-tolerance", type=float, default=None)
     parser.add_argument("--max-krylov-growth", type=float, default=None)
     parser.add_argument("--restart-at", type=int, default=None)
+    parser.add_argument("--run-options", default="", help="more options for every `perishell run`, one string")
     args = parser.parse_args()
     counts = [int(r) for r in args.ranks.split(",")]
     if not args.compare_only:
@@ -97,7 +101,7 @@ def main():
         outputs[ranks] = directory
         if args.compare_only:
             continue
-        log = run(args.app, args.mpirun, args.deck, ranks, ["--output", directory])
+        log = run(args.app, args.mpirun, args.deck, ranks, ["--output", directory] + args.run_options.split())
         krylov[ranks] = linear_iterations(log)
         partition = [line for line in log.splitlines() if line.startswith("partition:") or "imbalance" in line]
         print(f"{ranks} rank(s): {' '.join(partition) if partition else 'one rank'}")

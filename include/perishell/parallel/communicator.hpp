@@ -71,6 +71,9 @@ class Communicator {
   double min(double value) const { min(&value, 1); return value; }
   // True on every rank when it is true on any.
   bool any(bool value) const;
+  // True on every rank when two ranks of one node pass the same value (ranks sharing a GPU:
+  // the device id). Collective.
+  bool anySharedOnNode(int value) const;
 
   // The root's text on every rank.
   std::string broadcast(const std::string& text) const;

@@ -22,6 +22,9 @@ struct RunOptions {
   // Fence between the explicit step's phases to time them (implicit phases are always
   // timed); costs a synchronisation per phase.
   bool timePhases = false;
+  // A distributed explicit step's forces around its halo exchange (ExplicitOptions::
+  // overlapExchange): forced on or off, or (empty) on unless ranks of a node share a GPU.
+  std::optional<bool> exchangeOverlap;
   // The longest a long implicit increment goes without a progress line [s].
   double progressEverySeconds = 2.0;
   // Continue the run whose output directory this is, from its checkpoint.h5

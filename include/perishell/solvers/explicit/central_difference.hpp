@@ -66,6 +66,11 @@ struct ExplicitOptions {
   // Fence after each phase of a step and add its wall time to phaseSeconds() (the paper's
   // Table 3 columns). Costs a synchronisation per phase, so it is off for plain runs.
   bool timePhases = false;
+  // A distributed step's forces around its halo exchange: the interior while the messages
+  // travel, the rest after (docs/parallel.md, "Overlap"). Off, every force waits for the
+  // exchange, which the step then finishes at once: for ranks that share a GPU, whose
+  // contexts take turns on it, so that nothing overlaps and the split only adds launches.
+  bool overlapExchange = true;
 };
 
 // Wall time of the phases of the steps taken so far [s], with ExplicitOptions::timePhases.
@@ -164,6 +169,7 @@ class CentralDifferenceSolver {
     advance(monitor);
     timePhase(phaseSeconds_.integration, phaseStart);
     startHaloExchange();
+    if (!options_.overlapExchange) finishHaloExchange();
     timePhase(phaseSeconds_.exchange, phaseStart);
     if (monitor) {
       checkEnergy();
@@ -487,8 +493,8 @@ class CentralDifferenceSolver {
                          const pd::BondForceOutputs<MemorySpace>& outputs) {
     if (!distribution_.distributed()) return;
     if (body_.bonds.numBonds() > 0) {
-      // The frames are current but for the halo nodes the exchange just wrote.
-      pd::updateNodeFrames(space_, body_, state, distribution_.receivedNodes());
+      // The frames are current but for the halo nodes an exchange in flight just wrote.
+      if (options_.overlapExchange) pd::updateNodeFrames(space_, body_, state, distribution_.receivedNodes());
       if (stepWork_.boundaryBonds)
         pd::computeBondForces(space_, options_.forceKernel, *stepWork_.boundaryBonds, state, intact_, outputs,
                               pd::NodeFrames::Current);
@@ -1085,7 +1091,9 @@ class CentralDifferenceSolver {
     const auto images = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.mirrorImages.nodes);
     const auto masters = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.mirrorImages.masters);
     const LocalIndex numNodes = body.numNodes();
-    const auto received = [&slots](LocalIndex node) { return slots(node) > 0; };
+    // Without overlap the exchange is finished before a step begins: nothing waits for it.
+    const bool overlap = options_.overlapExchange;
+    const auto received = [&slots, overlap](LocalIndex node) { return overlap && slots(node) > 0; };
     Kokkos::View<std::uint8_t*, Kokkos::HostSpace> read("nodes whose forces a step reads", numNodes);
     for (LocalIndex node = 0; node < numNodes; ++node) read(node) = owned(node);
     for (std::size_t k = 0; k < images.extent(0); ++k)
@@ -1128,9 +1136,12 @@ class CentralDifferenceSolver {
       (waits ? boundaryRows : interiorRows)(node) = 1;
     }
     const auto restricted = [&](const Kokkos::View<std::uint8_t*, Kokkos::HostSpace>& rows) {
-      pd::PdBody<MemorySpace> part = body;
-      part.bonds = pd::restrictRows(space_, body.bonds, Kokkos::View<const std::uint8_t*, MemorySpace>(
-                                                            Kokkos::create_mirror_view_and_copy(MemorySpace{}, rows)));
+      std::optional<pd::PdBody<MemorySpace>> part;
+      if (std::none_of(rows.data(), rows.data() + rows.extent(0), [](std::uint8_t row) { return row != 0; }))
+        return part;  // no row: no launch
+      part = body;
+      part->bonds = pd::restrictRows(space_, body.bonds, Kokkos::View<const std::uint8_t*, MemorySpace>(
+                                                             Kokkos::create_mirror_view_and_copy(MemorySpace{}, rows)));
       return part;
     };
     work.interiorBonds = restricted(interiorRows);
