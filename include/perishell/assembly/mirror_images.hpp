@@ -111,22 +111,15 @@ MirrorImages<MemorySpaceT> makeMirrorImages(const mesh::SupportLayer& layer, Loc
     gatherImages.insert(gatherImages.end(), imagesOfMaster[master].begin(), imagesOfMaster[master].end());
     gatherOffsets.push_back(static_cast<LocalIndex>(gatherImages.size()));
   }
-  const auto toDevice = [](const std::vector<LocalIndex>& values, const char* label) {
-    Kokkos::View<LocalIndex*, MemorySpaceT> view(std::string(label), values.size());
-    const Kokkos::View<const LocalIndex*, Kokkos::HostSpace, Kokkos::MemoryTraits<Kokkos::Unmanaged>> host(
-        values.data(), values.size());
-    Kokkos::deep_copy(view, host);
-    return view;
-  };
   result.nodes = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, nodes);
   result.masters = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, masters);
   result.maps = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, maps);
   result.imageOf = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, imageOf);
   result.share = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, share);
   result.massShare = Kokkos::create_mirror_view_and_copy(MemorySpaceT{}, massShare);
-  result.gatherMasters = toDevice(gatherMasters, "mirror gather masters");
-  result.gatherOffsets = toDevice(gatherOffsets, "mirror gather offsets");
-  result.gatherImages = toDevice(gatherImages, "mirror gather images");
+  result.gatherMasters = viewOf<MemorySpaceT>(gatherMasters, "mirror gather masters");
+  result.gatherOffsets = viewOf<MemorySpaceT>(gatherOffsets, "mirror gather offsets");
+  result.gatherImages = viewOf<MemorySpaceT>(gatherImages, "mirror gather images");
   return result;
 }
 

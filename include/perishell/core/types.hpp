@@ -5,7 +5,9 @@
 
 #include <cstdint>
 #include <stdexcept>
+#include <string>
 #include <type_traits>
+#include <vector>
 
 namespace perishell {
 
@@ -63,6 +65,15 @@ void fillContiguous(const ExecutionSpaceT& space, const ViewT& view, typename Vi
   using Flat = Kokkos::View<typename ViewT::non_const_value_type*, typename ViewT::memory_space,
                             Kokkos::MemoryTraits<Kokkos::Unmanaged>>;
   Kokkos::deep_copy(space, Flat(view.data(), view.span()), value);
+}
+
+// A set-up list built on the host, as a view of MemorySpaceT (set-up only: it allocates and
+// copies).
+template <class MemorySpaceT, class T>
+Kokkos::View<T*, MemorySpaceT> viewOf(const std::vector<T>& host, const std::string& label) {
+  Kokkos::View<T*, MemorySpaceT> view(label, host.size());
+  Kokkos::deep_copy(view, Kokkos::View<const T*, Kokkos::HostSpace, Kokkos::MemoryUnmanaged>(host.data(), host.size()));
+  return view;
 }
 
 }  // namespace perishell

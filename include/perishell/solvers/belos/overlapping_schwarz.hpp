@@ -109,8 +109,8 @@ class OverlapImport {
         }
       receiveOffsets_.push_back(targets.size());
     }
-    sources_ = toDevice(sources, "perishell::overlap::sources");
-    targets_ = toDevice(targets, "perishell::overlap::targets");
+    sources_ = viewOf<memory_space>(sources, "perishell::overlap::sources");
+    targets_ = viewOf<memory_space>(targets, "perishell::overlap::targets");
     sendBuffer_ = VectorView<memory_space>("perishell::overlap::send", sources.size());
     receiveBuffer_ = VectorView<memory_space>("perishell::overlap::receive", targets.size());
     hostSend_ = Kokkos::create_mirror_view(sendBuffer_);
@@ -165,14 +165,6 @@ class OverlapImport {
   }
 
  private:
-  template <class T>
-  static Kokkos::View<T*, memory_space> toDevice(const std::vector<T>& host, const std::string& label) {
-    Kokkos::View<const T*, Kokkos::HostSpace, Kokkos::MemoryUnmanaged> view(host.data(), host.size());
-    Kokkos::View<T*, memory_space> device(label, host.size());
-    Kokkos::deep_copy(device, view);
-    return device;
-  }
-
   ExecutionSpaceT space_;
   std::shared_ptr<Distribution> distribution_;
   std::vector<std::size_t> sendOffsets_, receiveOffsets_;

@@ -1110,8 +1110,8 @@ class CentralDifferenceSolver {
         for (int a = 0; a < 4; ++a) waits = waits || received(quads(e, a));
         (waits ? boundary : interior).push_back(e);
       }
-      work.interiorElements = toDevice(interior, "interior shell elements");
-      work.boundaryElements = toDevice(boundary, "boundary shell elements");
+      work.interiorElements = viewOf<MemorySpace>(interior, "interior shell elements");
+      work.boundaryElements = viewOf<MemorySpace>(boundary, "boundary shell elements");
     }
     if (options_.forceKernel != deck::ForceKernel::NodeGather) {
       work.boundaryBonds = body;
@@ -1147,12 +1147,6 @@ class CentralDifferenceSolver {
     work.interiorBonds = restricted(interiorRows);
     work.boundaryBonds = restricted(boundaryRows);
     return work;
-  }
-  static Kokkos::View<LocalIndex*, MemorySpace> toDevice(const std::vector<LocalIndex>& values, const char* label) {
-    Kokkos::View<LocalIndex*, MemorySpace> view(std::string(label), values.size());
-    Kokkos::deep_copy(view, Kokkos::View<const LocalIndex*, Kokkos::HostSpace, Kokkos::MemoryUnmanaged>(
-                                values.data(), values.size()));
-    return view;
   }
 
   // With timePhases: fences, adds the time since `start` to `total` and restarts `start`.
