@@ -11,24 +11,51 @@
 
 namespace perishell::shell::detail {
 
+}  // namespace perishell::shell::detail
+
+namespace perishell::shell {
+
+// An explicit element's reference geometry as its force kernel reads it: the nodes'
+// coordinates X_a in the reference frame E0 (ShellReference::local) and E0 as a unit
+// quaternion. ShellBody keeps it per element (explicitGeometry), so that a step does not
+// rebuild the reference frame: a third of the one-point element's work (docs/explicit.md).
+struct ExplicitReference {
+  double local[4][3];
+  double frameQuaternion[4];
+};
+
+// How many doubles ExplicitReference packs into (ShellBody::explicitGeometry's columns).
+constexpr int explicitReferenceSize = 16;
+
+KOKKOS_INLINE_FUNCTION ExplicitReference explicitReference(const ShellReference& reference) {
+  ExplicitReference r{};
+  for (int a = 0; a < 4; ++a)
+    for (int k = 0; k < 3; ++k) r.local[a][k] = reference.local[a][k];
+  rotation::fromMatrix(reference.frame, r.frameQuaternion);
+  return r;
+}
+
+}  // namespace perishell::shell
+
+namespace perishell::shell::detail {
+
 // The deformational DOF d of an explicit element (6 N entries) from its nodes' positions and
 // unit quaternions, and the current frame E (rows), centroid and lengths the projector needs:
 // local translations E (x_a - x_c) - X_a (localTranslation) and local rotations
 // log(E R_a E0^T), taken as the rotation vector of the quaternion q_E q_a conj(q_E0): two
 // quaternion products per node instead of two 3 x 3 matrix products and a matrix logarithm.
 template <int N>
-KOKKOS_INLINE_FUNCTION void explicitDeformation(const ShellReference& reference, const double positions[][3],
+KOKKOS_INLINE_FUNCTION void explicitDeformation(const ExplicitReference& reference, const double positions[][3],
                                                 const double quaternions[][4], double E[3][3], double centroid[3],
                                                 FrameLengths<double>& lengths, double d[]) {
   corotationalFrame<N>(positions, E, centroid, lengths);
-  double frameQuaternion[4], referenceFrameQuaternion[4];
+  double frameQuaternion[4];
   rotation::fromMatrix(E, frameQuaternion);
-  rotation::fromMatrix(reference.frame, referenceFrameQuaternion);
   for (int a = 0; a < N; ++a) {
     localTranslation(E, centroid, positions[a], reference.local[a], &d[6 * a]);
     double turned[4], relative[4];
     rotation::multiply(frameQuaternion, quaternions[a], turned);
-    rotation::multiplyByConjugate(turned, referenceFrameQuaternion, relative);
+    rotation::multiplyByConjugate(turned, reference.frameQuaternion, relative);
     rotation::rotationVector(relative, &d[6 * a + 3]);
   }
 }

@@ -155,15 +155,14 @@ KOKKOS_INLINE_FUNCTION double triangleLocalForces(const double x[3][2], const Sh
 
 }  // namespace detail
 
-// Internal force f = dW/dq of a triangle stored as a b c c (referencePositions: its 4
-// corners; positions and quaternions: its 3 nodes'; force: 18 entries, the MITC4 element's
-// order) with its section scaled by membraneBendingScale on the membrane and bending blocks
-// and Allman's term on quadraticEdges (mitc3_triangle.hpp). Returns the strain energy W.
-KOKKOS_INLINE_FUNCTION double explicitTriangleForce(const double referencePositions[4][3], const double positions[][3],
+// Internal force f = dW/dq of a triangle stored as a b c c (reference: its 4 corners' geometry,
+// explicitReference; positions and quaternions: its 3 nodes'; force: 18 entries, the MITC4
+// element's order) with its section scaled by membraneBendingScale on the membrane and bending
+// blocks and Allman's term on quadraticEdges (mitc3_triangle.hpp). Returns the strain energy W.
+KOKKOS_INLINE_FUNCTION double explicitTriangleForce(const ExplicitReference& reference, const double positions[][3],
                                                     const double quaternions[][4], const ShellSection& section,
                                                     double membraneBendingScale, unsigned quadraticEdges,
                                                     double force[triangleDofCount]) {
-  const ShellReference reference = shellReference(referencePositions);
   double corners[3][2];
   detail::triangleCorners(reference, corners);
   double E[3][3], centroid[3], d[triangleDofCount];
@@ -173,6 +172,15 @@ KOKKOS_INLINE_FUNCTION double explicitTriangleForce(const double referencePositi
   const double energy = detail::triangleLocalForces(corners, section, membraneBendingScale, quadraticEdges, d, local);
   detail::projectLocalForces<3>(E, centroid, lengths, positions, d, local, force);
   return energy;
+}
+
+// The same from the 4 corners' reference positions.
+KOKKOS_INLINE_FUNCTION double explicitTriangleForce(const double referencePositions[4][3], const double positions[][3],
+                                                    const double quaternions[][4], const ShellSection& section,
+                                                    double membraneBendingScale, unsigned quadraticEdges,
+                                                    double force[triangleDofCount]) {
+  return explicitTriangleForce(explicitReference(shellReference(referencePositions)), positions, quaternions, section,
+                               membraneBendingScale, quadraticEdges, force);
 }
 
 }  // namespace perishell::shell

@@ -117,8 +117,10 @@ KOKKOS_INLINE_FUNCTION bool isTriangleElement(const double positions[4][3]) {
 
 namespace detail {
 
-// A triangle's corners in its flat frame (the frame's plane holds all three).
-KOKKOS_INLINE_FUNCTION void triangleCorners(const ShellReference& reference, double corners[3][2]) {
+// A triangle's corners in its flat frame (the frame's plane holds all three), from a
+// ShellReference or an ExplicitReference (shell/corotational_projector.hpp).
+template <class Reference>
+KOKKOS_INLINE_FUNCTION void triangleCorners(const Reference& reference, double corners[3][2]) {
   for (int a = 0; a < 3; ++a)
     for (int k = 0; k < 2; ++k) corners[a][k] = reference.local[a][k];
 }

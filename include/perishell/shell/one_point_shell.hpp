@@ -30,7 +30,8 @@
 //    nodal forces are dW/dq exactly: f_local = dW/dd, mapped to the global DOF through the
 //    derivative of d, including the frame's spin (the corotational projector; derived in
 //    docs/explicit.md). No stiffness matrix, no automatic differentiation: about 600 flops
-//    and 44 doubles read per element (positions, displacements, quaternions, section factors).
+//    and 60 doubles read per element (positions, displacements, quaternions, section factors,
+//    and the reference geometry ShellBody keeps, ExplicitReference).
 // The coupling's hybrid section (model.md §4, coupling/morphing.hpp) enters as one factor
 // s on the membrane and bending resultants and on their hourglass stiffnesses: the mean of
 // the element's four Gauss-point factors, i.e. 1 - alphaBar at the centre, which
@@ -50,10 +51,11 @@ namespace perishell::shell {
 // mesh of lat-long quads) has none; 0.05 is a twist of about 6 degrees across the element.
 constexpr double maxOnePointWarp = 0.05;
 
-// The element's reference constants, recomputed from the four reference positions on
-// every evaluation (flops are cheaper than the memory traffic of storing them).
+// The element's reference constants, recomputed on every evaluation from the nodes'
+// coordinates in the reference frame (ExplicitReference, kept per element): a few dozen
+// flops, cheaper than the memory traffic of storing them.
 struct OnePointReference {
-  ShellReference geometry;  // frame E0 (rows) and the nodes' local coordinates
+  double local[4][3];       // the nodes' coordinates in the reference frame E0 (ShellReference::local)
   double area;              // A of the flat projection
   double dNdx[4], dNdy[4];  // the uniform gradient at the centre
   double hourglass[4];      // Flanagan-Belytschko gamma_a
@@ -71,10 +73,11 @@ struct OnePointReference {
 KOKKOS_INLINE_FUNCTION constexpr int tyingEdgeFrom(int edge) { return edge == 1 ? 3 : (edge == 3 ? 1 : 0); }
 KOKKOS_INLINE_FUNCTION constexpr int tyingEdgeTo(int edge) { return edge == 0 ? 1 : (edge == 2 ? 3 : 2); }
 
-KOKKOS_INLINE_FUNCTION OnePointReference onePointReference(const double referencePositions[4][3]) {
+KOKKOS_INLINE_FUNCTION OnePointReference onePointReference(const double local[4][3]) {
   OnePointReference r{};
-  r.geometry = shellReference(referencePositions);
-  const auto& x = r.geometry.local;
+  for (int a = 0; a < 4; ++a)
+    for (int k = 0; k < 3; ++k) r.local[a][k] = local[a][k];
+  const auto& x = r.local;
   r.area = 0.5 * ((x[2][0] - x[0][0]) * (x[3][1] - x[1][1]) - (x[3][0] - x[1][0]) * (x[2][1] - x[0][1]));
   const double inverseTwiceArea = 0.5 / r.area;  // one division: they cost tens of flops on a GPU
   for (int a = 0; a < 4; ++a) {
@@ -116,9 +119,9 @@ KOKKOS_INLINE_FUNCTION OnePointReference onePointReference(const double referenc
 inline void checkOnePointShellElement(const double referencePositions[4][3], long element) {
   checkShellElement(referencePositions, element);
   if (isTriangleElement(referencePositions)) return;  // flat; shell/explicit_triangle.hpp
-  const OnePointReference r = onePointReference(referencePositions);
+  const OnePointReference r = onePointReference(shellReference(referencePositions).local);
   double warp = 0.0;
-  for (int a = 0; a < 4; ++a) warp = std::max(warp, std::abs(r.geometry.local[a][2]));
+  for (int a = 0; a < 4; ++a) warp = std::max(warp, std::abs(r.local[a][2]));
   warp /= std::sqrt(r.area);
   if (warp > maxOnePointWarp) {
     std::ostringstream message;
@@ -208,7 +211,7 @@ KOKKOS_INLINE_FUNCTION void onePointStrains(const OnePointReference& r, const T 
   // MITC4's covariant shears at the tying edges' midpoints, e = dw/ds + beta . dx/ds along the
   // edge (s its natural coordinate): (w_to - w_from)/2 + (beta_from + beta_to)/2 . (x_to - x_from)/2.
   T covariant[4];
-  const auto& x = r.geometry.local;
+  const auto& x = r.local;
   for (int edge = 0; edge < 4; ++edge) {
     const T* from = &d[6 * tyingEdgeFrom(edge)];
     const T* to = &d[6 * tyingEdgeTo(edge)];
@@ -248,12 +251,12 @@ KOKKOS_INLINE_FUNCTION void onePointEnergy(const OnePointReference& r, const One
 
 // The deformational DOF in a given current frame: E (x_a - x_c) - X_a, log(E R_a E0^T).
 template <class T, class RotationT>
-KOKKOS_INLINE_FUNCTION void onePointDeformation(const OnePointReference& r, const T frame[3][3], const T centroid[3],
-                                                const T x[4][3], const RotationT rotations[4][3][3],
-                                                T d[shellDofCount]) {
+KOKKOS_INLINE_FUNCTION void onePointDeformation(const ShellReference& reference, const T frame[3][3],
+                                                const T centroid[3], const T x[4][3],
+                                                const RotationT rotations[4][3][3], T d[shellDofCount]) {
   for (int a = 0; a < 4; ++a) {
-    localTranslation(frame, centroid, x[a], r.geometry.local[a], &d[6 * a]);
-    localRotation(frame, rotations[a], r.geometry.frame, &d[6 * a + 3]);
+    localTranslation(frame, centroid, x[a], reference.local[a], &d[6 * a]);
+    localRotation(frame, rotations[a], reference.frame, &d[6 * a + 3]);
   }
 }
 
@@ -265,13 +268,14 @@ template <class T, class RotationT>
 KOKKOS_INLINE_FUNCTION void onePointShellEnergy(const double referencePositions[4][3], const T positions[4][3],
                                                 const RotationT rotations[4][3][3], const ShellSection& section,
                                                 double membraneBendingScale, T& pointEnergy, T& hourglassEnergy) {
-  const OnePointReference r = onePointReference(referencePositions);
+  const ShellReference reference = shellReference(referencePositions);
+  const OnePointReference r = onePointReference(reference.local);
   const detail::OnePointSection s = detail::onePointSection(r, section, membraneBendingScale);
   T frame[3][3], centroid[3];
   detail::FrameLengths<T> lengths;
   detail::corotationalFrame(positions, frame, centroid, lengths);
   T d[shellDofCount];
-  detail::onePointDeformation(r, frame, centroid, positions, rotations, d);
+  detail::onePointDeformation(reference, frame, centroid, positions, rotations, d);
   detail::onePointEnergy(r, s, d, pointEnergy, hourglassEnergy);
 }
 
@@ -285,16 +289,17 @@ struct OnePointEnergies {
 };
 
 // Internal force f = dW/dq (global translations, then spatial moments per node, as
-// shellInternalForce) and the element's energies; the nodes' rotations as unit quaternions.
-KOKKOS_INLINE_FUNCTION OnePointEnergies onePointShellForce(const double referencePositions[4][3],
+// shellInternalForce) and the element's energies; the element's reference geometry as
+// explicitReference gives it, the nodes' rotations as unit quaternions.
+KOKKOS_INLINE_FUNCTION OnePointEnergies onePointShellForce(const ExplicitReference& reference,
                                                           const double positions[4][3], const double quaternions[4][4],
                                                           const ShellSection& section, double membraneBendingScale,
                                                           double force[shellDofCount]) {
-  const OnePointReference r = onePointReference(referencePositions);
+  const OnePointReference r = onePointReference(reference.local);
   const detail::OnePointSection s = detail::onePointSection(r, section, membraneBendingScale);
   double E[3][3], centroid[3], d[shellDofCount];
   detail::FrameLengths<double> lengths;
-  detail::explicitDeformation<4>(r.geometry, positions, quaternions, E, centroid, lengths, d);
+  detail::explicitDeformation<4>(reference, positions, quaternions, E, centroid, lengths, d);
 
   double membrane[3], curvature[3], shear[4], drilling, hourglass[5];
   detail::onePointStrains(r, d, membrane, curvature, shear, drilling, hourglass);
@@ -344,7 +349,7 @@ KOKKOS_INLINE_FUNCTION OnePointEnergies onePointShellForce(const double referenc
   const double alongEta = r.naturalGradient[1][0] * q[0] + r.naturalGradient[1][1] * q[1];
   const double covariantForce[4] = {0.5 * alongXi - q[2], 0.5 * alongXi + q[2], 0.5 * alongEta - q[3],
                                     0.5 * alongEta + q[3]};
-  const auto& x = r.geometry.local;
+  const auto& x = r.local;
   for (int edge = 0; edge < 4; ++edge) {
     const int from = tyingEdgeFrom(edge), to = tyingEdgeTo(edge);
     const double f = covariantForce[edge];
@@ -360,6 +365,15 @@ KOKKOS_INLINE_FUNCTION OnePointEnergies onePointShellForce(const double referenc
   return energies;
 }
 
+// The same from the four reference positions.
+KOKKOS_INLINE_FUNCTION OnePointEnergies onePointShellForce(const double referencePositions[4][3],
+                                                          const double positions[4][3], const double quaternions[4][4],
+                                                          const ShellSection& section, double membraneBendingScale,
+                                                          double force[shellDofCount]) {
+  return onePointShellForce(explicitReference(shellReference(referencePositions)), positions, quaternions, section,
+                            membraneBendingScale, force);
+}
+
 // The diagonal of the element's linear stiffness at its reference state, as means per node:
 // of the three translational and of the three rotational entries (the explicit solver's
 // rotary-inertia scaling, solvers/explicit/nodal_inertia.hpp). K_jj = 2 W(e_j): the energy is
@@ -367,7 +381,7 @@ KOKKOS_INLINE_FUNCTION OnePointEnergies onePointShellForce(const double referenc
 KOKKOS_INLINE_FUNCTION void onePointShellNodalStiffness(const double referencePositions[4][3],
                                                         const ShellSection& section, double membraneBendingScale,
                                                         double translational[4], double rotational[4]) {
-  const OnePointReference r = onePointReference(referencePositions);
+  const OnePointReference r = onePointReference(shellReference(referencePositions).local);
   const detail::OnePointSection s = detail::onePointSection(r, section, membraneBendingScale);
   for (int a = 0; a < 4; ++a) {
     translational[a] = rotational[a] = 0.0;

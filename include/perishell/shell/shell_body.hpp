@@ -52,6 +52,9 @@ struct ShellBody {
   // forces, strain, hourglass) between the two kernels.
   ElementForceAssembly assembly = ElementForceAssembly::Scatter;
   Kokkos::View<double* [26], Kokkos::LayoutRight, MemorySpaceT> elementForces;
+  // One-point only: each element's ExplicitReference (shell/corotational_projector.hpp), in
+  // the memory space's layout (per element contiguous on a host, coalesced on a GPU).
+  Kokkos::View<double* [explicitReferenceSize], MemorySpaceT> explicitGeometry;
   // Per element, a triangle's edges with Allman's term (triangleQuadraticEdges): the one-point
   // kind's triangles build their forces with it, and a triangle's strains take it (both kinds).
   Kokkos::View<unsigned*, MemorySpaceT> quadraticEdges;
@@ -101,6 +104,8 @@ ShellBody<MemorySpaceT> selectElements(const ExecutionSpaceT& space, const Shell
     subset.localStiffness =
         Kokkos::View<double* [24][24], Kokkos::LayoutRight, MemorySpaceT>("selected local stiffness", count);
   if (withEdges) subset.quadraticEdges = Kokkos::View<unsigned*, MemorySpaceT>("selected quadratic edges", count);
+  const bool withGeometry = body.explicitGeometry.extent(0) > 0;
+  if (withGeometry) subset.explicitGeometry = decltype(subset.explicitGeometry)("selected explicit geometry", count);
   const auto to = subset;
   Kokkos::parallel_for(
       "perishell::shell::selectElements::copy", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, count),
@@ -114,6 +119,8 @@ ShellBody<MemorySpaceT> selectElements(const ExecutionSpaceT& space, const Shell
           for (int r = 0; r < 24; ++r)
             for (int c = 0; c < 24; ++c) to.localStiffness(k, r, c) = body.localStiffness(e, r, c);
         if (withEdges) to.quadraticEdges(k) = body.quadraticEdges(e);
+        if (withGeometry)
+          for (int c = 0; c < explicitReferenceSize; ++c) to.explicitGeometry(k, c) = body.explicitGeometry(e, c);
       });
   if (body.nodeElementOffsets.extent(0) > 0) {
     const auto incidence =
@@ -142,6 +149,24 @@ template <class MemorySpaceT>
 using ElementLocalForcesView = Kokkos::View<double* [24], Kokkos::LayoutRight, MemorySpaceT>;
 
 namespace detail {
+
+// ExplicitReference as ShellBody::explicitGeometry keeps it: local coordinates, then the
+// frame's quaternion.
+template <class GeometryView>
+KOKKOS_INLINE_FUNCTION void storeExplicitReference(const ExplicitReference& reference, const GeometryView& geometry,
+                                                   LocalIndex element) {
+  for (int a = 0; a < 4; ++a)
+    for (int k = 0; k < 3; ++k) geometry(element, 3 * a + k) = reference.local[a][k];
+  for (int k = 0; k < 4; ++k) geometry(element, 12 + k) = reference.frameQuaternion[k];
+}
+template <class GeometryView>
+KOKKOS_INLINE_FUNCTION ExplicitReference loadExplicitReference(const GeometryView& geometry, LocalIndex element) {
+  ExplicitReference reference;
+  for (int a = 0; a < 4; ++a)
+    for (int k = 0; k < 3; ++k) reference.local[a][k] = geometry(element, 3 * a + k);
+  for (int k = 0; k < 4; ++k) reference.frameQuaternion[k] = geometry(element, 12 + k);
+  return reference;
+}
 
 // Element e's reference and current corner positions and its nodes' rotations as unit
 // quaternions (the explicit elements read them so).
@@ -279,6 +304,16 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
   if (kind == ShellElementKind::OnePoint) {
     body.elementForces = decltype(body.elementForces)("shell element forces", quads.extent(0));
     body.assembly = defaultElementForceAssembly<ExecutionSpaceT>();
+    body.explicitGeometry = decltype(body.explicitGeometry)("shell explicit geometry", quads.extent(0));
+    const auto b = body;
+    Kokkos::parallel_for(
+        "perishell::shell::explicitGeometry", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, b.numElements()),
+        KOKKOS_LAMBDA(const LocalIndex e) {
+          double reference[4][3];
+          for (int a = 0; a < 4; ++a)
+            for (int d = 0; d < 3; ++d) reference[a][d] = b.referencePositions(b.quads(e, a), d);
+          detail::storeExplicitReference(explicitReference(shellReference(reference)), b.explicitGeometry, e);
+        });
     return body;
   }
   body.localStiffness = decltype(body.localStiffness)("shell local stiffness", ccmElements.size());
@@ -348,16 +383,17 @@ void launchOnePointForces(const ExecutionSpaceT& space, const ShellBody<MemorySp
         const LocalIndex e = selection.element(k);
         double reference[4][3], current[4][3], quaternions[4][4], force[shellDofCount];
         loadExplicitElement(body, state, e, reference, current, quaternions);
+        const ExplicitReference geometry = loadExplicitReference(body.explicitGeometry, e);
         const double scale = 0.25 * (body.membraneBendingScale(e, 0) + body.membraneBendingScale(e, 1) +
                                      body.membraneBendingScale(e, 2) + body.membraneBendingScale(e, 3));
         int corners = 4;
         OnePointEnergies elementEnergy{0.0, 0.0};
         if constexpr (WithTriangles) corners = mesh::cornerCount(body.quads, e);
         if (WithTriangles && corners == 3)
-          elementEnergy.strain = explicitTriangleForce(reference, current, quaternions, body.section, scale,
+          elementEnergy.strain = explicitTriangleForce(geometry, current, quaternions, body.section, scale,
                                                        body.quadraticEdges(e), force);
         else
-          elementEnergy = onePointShellForce(reference, current, quaternions, body.section, scale, force);
+          elementEnergy = onePointShellForce(geometry, current, quaternions, body.section, scale, force);
         // Energies go to the nodes in equal shares.
         if (gather) {
           for (int r = 0; r < 6 * corners; ++r) body.elementForces(e, r) = force[r];
