@@ -66,8 +66,14 @@ KOKKOS_INLINE_FUNCTION void explicitDeformation(const ExplicitReference& referen
 KOKKOS_INLINE_FUNCTION void applyTransposedInverseLeftJacobian(const double theta[3], const double m[3], double out[3]) {
   const double angleSquared = theta[0] * theta[0] + theta[1] * theta[1] + theta[2] * theta[2];
   double c;
-  if (angleSquared < 1e-4) {
-    c = 1.0 / 12.0 + angleSquared * (1.0 / 720.0 + angleSquared / 30240.0);
+  if (angleSquared < 1e-2) {
+    // c = sum_n |B_2n| theta^(2n-2) / (2n)! (Bernoulli numbers), to n = 6: below 0.1 rad, where
+    // the local rotations lie, the first term left out is 1e-18 of c, and no sqrt, sin, cos
+    // or division is taken.
+    const double x = angleSquared;
+    c = 1.0 / 12.0 +
+        x * (1.0 / 720.0 + x * (1.0 / 30240.0 + x * (1.0 / 1209600.0 +
+                                                     x * (1.0 / 47900160.0 + x * (691.0 / 1307674368000.0)))));
   } else {
     const double angle = Kokkos::Experimental::sqrt(angleSquared);
     c = 1.0 / angleSquared -
