@@ -571,6 +571,41 @@ TEST(TEST_CATEGORY, quaternion_of_a_matrix_and_its_logarithm_invert_the_exponent
     }
 }
 
+TEST(TEST_CATEGORY, rotation_series_match_the_closed_forms_on_both_sides_of_their_thresholds) {
+  // exponential, rotationVector and c(theta) of J_l^-T switch from their power series to the
+  // closed forms at 0.01 rad, tan(theta/2) = 0.1 and 0.1 rad (core/rotation.hpp,
+  // shell/corotational_projector.hpp): each agrees with the closed form in long double to
+  // round-off on both sides.
+  const double axis[3] = {0.6, -0.48, 0.64};
+  for (const double angle : {1e-6, 0.0099, 0.0101, 0.05, 0.0999, 0.1001, 0.199, 0.2, 0.3}) {
+    const double theta[3] = {angle * axis[0], angle * axis[1], angle * axis[2]};
+    const long double a = angle, half = a / 2;
+    double q[4];
+    perishell::rotation::exponential(theta, q);
+    EXPECT_NEAR(q[0], static_cast<double>(std::cos(half)), 2e-16) << "angle " << angle;
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(q[k + 1], static_cast<double>(std::sin(half) / a * theta[k]), 2e-16 * angle) << "angle " << angle;
+    const double exact[4] = {static_cast<double>(std::cos(half)), static_cast<double>(std::sin(half) * axis[0]),
+                             static_cast<double>(std::sin(half) * axis[1]),
+                             static_cast<double>(std::sin(half) * axis[2])};
+    double back[3];
+    perishell::rotation::rotationVector(exact, back);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(back[k], theta[k], 4e-16 * angle) << "angle " << angle;
+    const double moment[3] = {0.3, -0.2, 0.9};
+    double mapped[3];
+    perishell::shell::detail::applyTransposedInverseLeftJacobian(theta, moment, mapped);
+    const long double c = 1.0L / (a * a) - (1.0L + std::cos(a)) / (2.0L * a * std::sin(a));
+    const long double once[3] = {theta[1] * (long double)moment[2] - theta[2] * (long double)moment[1],
+                                 theta[2] * (long double)moment[0] - theta[0] * (long double)moment[2],
+                                 theta[0] * (long double)moment[1] - theta[1] * (long double)moment[0]};
+    const long double twice[3] = {theta[1] * once[2] - theta[2] * once[1], theta[2] * once[0] - theta[0] * once[2],
+                                  theta[0] * once[1] - theta[1] * once[0]};
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(mapped[k], static_cast<double>(moment[k] + 0.5L * once[k] + c * twice[k]), 4e-16)
+          << "angle " << angle;
+  }
+}
+
 TEST(TEST_CATEGORY, one_point_warped_and_degenerate_elements_are_refused) {
   const double twisted[4][3] = {{0, 0, 0}, {1, 0, 0.2}, {1, 1, 0}, {0, 1, 0.2}};  // warp ~0.1
   try {
