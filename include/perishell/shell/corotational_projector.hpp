@@ -9,10 +9,6 @@
 // triangle (the quad a b c c: node 3's part of the frame's derivative goes to node 2).
 #include <perishell/shell/mitc4_shell.hpp>
 
-namespace perishell::shell::detail {
-
-}  // namespace perishell::shell::detail
-
 namespace perishell::shell {
 
 // An explicit element's reference geometry as its force kernel reads it: the nodes'

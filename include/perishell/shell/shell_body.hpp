@@ -168,6 +168,14 @@ KOKKOS_INLINE_FUNCTION ExplicitReference loadExplicitReference(const GeometryVie
   return reference;
 }
 
+// Element e's corners' reference positions.
+template <class MemorySpaceT>
+KOKKOS_INLINE_FUNCTION void loadReferenceCorners(const ShellBody<MemorySpaceT>& body, LocalIndex element,
+                                                 double reference[4][3]) {
+  for (int a = 0; a < 4; ++a)
+    for (int d = 0; d < 3; ++d) reference[a][d] = body.referencePositions(body.quads(element, a), d);
+}
+
 // Element e's reference and current corner positions and its nodes' rotations as unit
 // quaternions (the explicit elements read them so).
 template <class MemorySpaceT>
@@ -310,8 +318,7 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
         "perishell::shell::explicitGeometry", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, b.numElements()),
         KOKKOS_LAMBDA(const LocalIndex e) {
           double reference[4][3];
-          for (int a = 0; a < 4; ++a)
-            for (int d = 0; d < 3; ++d) reference[a][d] = b.referencePositions(b.quads(e, a), d);
+          detail::loadReferenceCorners(b, e, reference);
           detail::storeExplicitReference(explicitReference(shellReference(reference)), b.explicitGeometry, e);
         });
     return body;
@@ -322,8 +329,7 @@ ShellBody<typename ExecutionSpaceT::memory_space> makeShellBody(
       "perishell::shell::localStiffness", Kokkos::RangePolicy<ExecutionSpaceT>(space, 0, b.numElements()),
       KOKKOS_LAMBDA(const LocalIndex e) {
         double reference[4][3];
-        for (int a = 0; a < 4; ++a)
-          for (int d = 0; d < 3; ++d) reference[a][d] = b.referencePositions(b.quads(e, a), d);
+        detail::loadReferenceCorners(b, e, reference);
         const double scale[4] = {b.membraneBendingScale(e, 0), b.membraneBendingScale(e, 1),
                                  b.membraneBendingScale(e, 2), b.membraneBendingScale(e, 3)};
         double K[24][24];
@@ -512,8 +518,7 @@ void addShellNodalStiffness(const ExecutionSpaceT& space, const ShellBody<Memory
         const int corners = mesh::cornerCount(body.quads, e);
         if (onePoint) {
           double reference[4][3];
-          for (int a = 0; a < 4; ++a)
-            for (int d = 0; d < 3; ++d) reference[a][d] = body.referencePositions(body.quads(e, a), d);
+          detail::loadReferenceCorners(body, e, reference);
           const double scale = 0.25 * (body.membraneBendingScale(e, 0) + body.membraneBendingScale(e, 1) +
                                        body.membraneBendingScale(e, 2) + body.membraneBendingScale(e, 3));
           if (corners == 4) {
