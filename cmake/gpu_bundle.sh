@@ -13,6 +13,8 @@ for b in "${binaries[@]}"; do
   case "$b" in *.cmake) continue ;; esac
   [ -x "$b" ] && strip -o "$out/bin/$(basename "$b")" "$b"
 done
+# The per-kernel timer (perf/kernel_timer.cpp): KOKKOS_PROFILE_LIBRARY=lib/libperishell_kernel_timer.so.
+if [ -f "$build/perf/libperishell_kernel_timer.so" ]; then cp "$build/perf/libperishell_kernel_timer.so" "$out/lib/"; fi
 # Every shared library the binaries need (a bare CUDA image may lack BLAS, HDF5 and their
 # chains), except the driver, glibc and the C++ runtime, which stay the host's.
 for b in "$out"/bin/*; do ldd "$b"; done | awk '$3 ~ /^\// {print $3}' | sort -u |
