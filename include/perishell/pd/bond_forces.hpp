@@ -122,7 +122,7 @@ void updateNodeFrames(const ExecutionSpaceT& space, const PdBody<MemorySpaceT>& 
 }
 
 // Whether computeBondForces first brings every node's frame up to date (updateNodeFrames), or
-// the caller did (a step evaluating its bonds in parts, each over current frames).
+// the caller did (a step evaluating its bonds in parts, or only the frames its bonds read).
 enum class NodeFrames { Update, Current };
 
 template <class ExecutionSpaceT, class MemorySpaceT>

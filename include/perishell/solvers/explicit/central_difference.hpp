@@ -182,7 +182,7 @@ class CentralDifferenceSolver {
   // The energies between steps (one extra force evaluation into scratch outputs, so no
   // state changes and no bond is counted as breaking twice); kinetic from v_{n-1/2}.
   EnergyReport energies() {
-    fillContiguous(space_, forces_, 0.0);
+    zeroForces();
     Kokkos::deep_copy(space_, strainEnergy_, 0.0);
     Kokkos::deep_copy(space_, hourglassEnergy_, 0.0);
     if (discardedFracture_.extent(0) == 0) {
@@ -456,9 +456,16 @@ class CentralDifferenceSolver {
     assembly::imposeMirrorImages(space_, actions_.mirrorImages, displacements, rotations, actions_.prescribedAt(0.0, 1.0));
   }
 
+  // forces_ zeroed for an evaluation that adds into them. The update leaves them zero
+  // (advance), so a step launches no fill of its own (docs/explicit.md, "Mixed models").
+  void zeroForces() {
+    if (!forcesZero_) fillContiguous(space_, forces_, 0.0);
+    forcesZero_ = false;
+  }
+
   // A step's outputs, zeroed: forces, and the strain and hourglass energies on a monitor step.
   pd::BondForceOutputs<MemorySpace> stepOutputs(bool withStrainEnergy) {
-    fillContiguous(space_, forces_, 0.0);
+    zeroForces();
     if (withStrainEnergy) {
       Kokkos::deep_copy(space_, strainEnergy_, 0.0);
       Kokkos::deep_copy(space_, hourglassEnergy_, 0.0);
@@ -476,7 +483,7 @@ class CentralDifferenceSolver {
   void addInteriorForces(const pd::PdKinematics<MemorySpace>& state,
                          const pd::BondForceOutputs<MemorySpace>& outputs) {
     if (!distribution_.distributed()) {
-      addInternalForces(body_, shell_, options_.forceKernel, state, outputs);
+      addModelForces(state, outputs);
       return;
     }
     if (body_.bonds.numBonds() > 0) {
@@ -505,6 +512,20 @@ class CentralDifferenceSolver {
       shell::gatherShellForces(space_, *stepWork_.shell, outputs.forces, outputs.strainEnergy,
                                hourglassOutput(outputs));
     }
+    assembly::condenseImageForces(space_, actions_.mirrorImages, outputs.forces);
+  }
+  // One rank's forces: the bonds' (reading the frames of their own nodes only: a mixed
+  // model's CCM nodes have none), then the shell elements'.
+  void addModelForces(const pd::PdKinematics<MemorySpace>& state, const pd::BondForceOutputs<MemorySpace>& outputs) {
+    if (body_.bonds.numBonds() > 0) {
+      if (stepWork_.bondedNodes.extent(0) > 0)
+        pd::updateNodeFrames(space_, body_, state, stepWork_.bondedNodes);
+      else
+        pd::updateNodeFrames(space_, body_, state);
+      pd::computeBondForces(space_, options_.forceKernel, body_, state, intact_, outputs, pd::NodeFrames::Current);
+    }
+    if (shell_)
+      shell::subtractShellForces(space_, *shell_, state, outputs.forces, outputs.strainEnergy, hourglassOutput(outputs));
     assembly::condenseImageForces(space_, actions_.mirrorImages, outputs.forces);
   }
   VectorView<MemorySpace> hourglassOutput(const pd::BondForceOutputs<MemorySpace>& outputs) const {
@@ -570,7 +591,10 @@ class CentralDifferenceSolver {
             kineticNode += 0.5 * inertiaD * (firstStep ? oldV * oldV : oldV * newV);
             newVelocity[d] = newV;
           }
-          for (int d = 0; d < 6; ++d) velocities(node, d) = newVelocity[d];
+          for (int d = 0; d < 6; ++d) {
+            velocities(node, d) = newVelocity[d];
+            forces(node, d) = 0.0;  // for the next step's evaluation (zeroForces)
+          }
           for (int k = 0; k < 3; ++k) displacements(node, k) += dt * newVelocity[k];
           const double spin[3] = {dt * newVelocity[3], dt * newVelocity[4], dt * newVelocity[5]};
           double q[4] = {rotations(node, 0), rotations(node, 1), rotations(node, 2), rotations(node, 3)};
@@ -583,6 +607,7 @@ class CentralDifferenceSolver {
           if (dissipated != 0.0) dampingWork(node) += dissipated;
           if (monitor) kinetic(node) = kineticNode;
         });
+    forcesZero_ = true;
     assembly::imposeMirrorImages(space_, actions_.mirrorImages, displacements, rotations,
                                  actions_.prescribedAt(time_ + dt, 1.0));
   }
@@ -838,7 +863,7 @@ class CentralDifferenceSolver {
   // change (fracture and damping are accumulated, not evaluated).
   double patchEnergy(const Patch& patch, const pd::BondFlagView<MemorySpace>& intact) {
     const LocalIndex numNodes = body_.numNodes();
-    fillContiguous(space_, forces_, 0.0);
+    zeroForces();
     Kokkos::deep_copy(space_, strainEnergy_, 0.0);
     const pd::BondForceOutputs<MemorySpace> outputs{
         forces_, strainEnergy_, VectorView<MemorySpace>("patch fracture energy scratch", numNodes),
@@ -1081,13 +1106,25 @@ class CentralDifferenceSolver {
   // wait for the exchange. Empty on one rank: the step evaluates the whole bodies.
   using ElementSelection = shell::ElementSelection<MemorySpace>;
   struct StepWork {
+    // One rank: the nodes with bonds where some have none (a mixed model), else empty.
+    Kokkos::View<const LocalIndex*, MemorySpace> bondedNodes;
     std::optional<pd::PdBody<MemorySpace>> interiorBonds, boundaryBonds;
     std::optional<shell::ShellBody<MemorySpace>> shell;
     Kokkos::View<LocalIndex*, MemorySpace> interiorElements, boundaryElements;  // into *shell
   };
   StepWork stepWorkOf(const pd::PdBody<MemorySpace>& body,
                       const std::optional<shell::ShellBody<MemorySpace>>& shell) const {
-    if (!distribution_.distributed()) return {};
+    if (!distribution_.distributed()) {
+      StepWork work;
+      if (body.bonds.numBonds() == 0) return work;
+      const auto offsets = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.bonds.offsets);
+      std::vector<LocalIndex> bonded;
+      for (LocalIndex node = 0; node < body.numNodes(); ++node)
+        if (offsets(node + 1) > offsets(node)) bonded.push_back(node);
+      if (!bonded.empty() && bonded.size() < static_cast<std::size_t>(body.numNodes()))
+        work.bondedNodes = viewOf<MemorySpace>(bonded, "nodes with bonds");
+      return work;
+    }
     const auto owned = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, distribution_.owned());
     const auto slots = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, distribution_.ownerSlots());
     const auto images = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.mirrorImages.nodes);
@@ -1181,6 +1218,7 @@ class CentralDifferenceSolver {
   long long step_ = 0;
   double initialEnergy_ = 0.0;
   bool nonFinite_ = false;
+  bool forcesZero_ = true;  // every entry of forces_ is zero (zeroForces)
   EnergyReport lastReport_;
   ExplicitPhaseSeconds phaseSeconds_;
 };
