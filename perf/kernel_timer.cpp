@@ -1,16 +1,21 @@
-// Per-kernel GPU time of any perishell run on a CUDA build, by kernel label: a Kokkos Tools
-// library (the device machine has no Nsight Systems, and Nsight Compute serialises and
-// replays every launch). Each parallel_for/reduce/scan is bracketed by two CUDA events on the
-// legacy default stream, which orders it against the kernels of every blocking stream, so the
-// events time the kernel itself; the events are read in batches, off the launch path.
+// Per-kernel time of any perishell run, by kernel label: a Kokkos Tools library (the device
+// machine has no Nsight Systems, and Nsight Compute serialises and replays every launch).
+// CUDA builds: each parallel_for/reduce/scan is bracketed by two CUDA events on the legacy
+// default stream, which orders it against the kernels of every blocking stream, so the
+// events time the kernel itself; the events are read in batches, off the launch path (a
+// short kernel still reads a few microseconds long: the events' own launches). Host builds:
+// a host backend's dispatch returns when the kernel is done, so the wall clock between begin
+// and end is its time.
 // At exit it prints, per label, launches, total and mean time, sorted by total.
 //
-//   built with the cuda presets (perishell_kernel_timer); then
-//   KOKKOS_PROFILE_LIBRARY=build/cuda/perf/libperishell_kernel_timer.so perishell run DECK
+//   KOKKOS_PROFILE_LIBRARY=build/PRESET/perf/libperishell_kernel_timer.so perishell run DECK
 //   (cmake/gpu_bundle.sh packs it as lib/libperishell_kernel_timer.so)
+#ifdef PERISHELL_KERNEL_TIMER_CUDA
 #include <cuda_runtime.h>
+#endif
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <map>
@@ -19,18 +24,20 @@
 
 namespace {
 
-struct Launch {
-  std::string label;
-  cudaEvent_t start, stop;
-};
-
 struct Totals {
   long launches = 0;
   double milliseconds = 0.0;
 };
 
-std::vector<Launch> pending;
 std::map<std::string, Totals> totals;
+
+#ifdef PERISHELL_KERNEL_TIMER_CUDA
+struct Launch {
+  std::string label;
+  cudaEvent_t start, stop;
+};
+
+std::vector<Launch> pending;
 constexpr std::size_t batch = 4096;
 
 void drain() {
@@ -59,6 +66,24 @@ void begin(const char* label, std::uint64_t* id) {
 }
 
 void end(std::uint64_t id) { cudaEventRecord(pending[id].stop, 0); }
+#else
+std::string running;
+std::chrono::steady_clock::time_point started;
+
+void drain() {}
+
+void begin(const char* label, std::uint64_t* id) {
+  running = label;
+  *id = 0;
+  started = std::chrono::steady_clock::now();
+}
+
+void end(std::uint64_t) {
+  Totals& t = totals[running];
+  ++t.launches;
+  t.milliseconds += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+}
+#endif
 
 }  // namespace
 
