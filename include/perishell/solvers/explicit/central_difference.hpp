@@ -457,7 +457,7 @@ class CentralDifferenceSolver {
   }
 
   // forces_ zeroed for an evaluation that adds into them. The update leaves them zero
-  // (advance), so a step launches no fill of its own (docs/explicit.md, "Mixed models").
+  // (advance), so a step launches no fill of its own (docs/explicit.md, "Around the forces").
   void zeroForces() {
     if (!forcesZero_) fillContiguous(space_, forces_, 0.0);
     forcesZero_ = false;
@@ -1103,7 +1103,8 @@ class CentralDifferenceSolver {
   // read no node the exchange writes, runs while the exchange is in flight; the boundary after
   // it. A node's bond row is whole in one part and the gather sums every element of a node
   // after both, so each node's sums are those of one rank, to the bit. Bond-scatter bonds all
-  // wait for the exchange. Empty on one rank: the step evaluates the whole bodies.
+  // wait for the exchange. On one rank the step evaluates the whole bodies, and only
+  // bondedNodes is set.
   using ElementSelection = shell::ElementSelection<MemorySpace>;
   struct StepWork {
     // One rank: the nodes with bonds where some have none (a mixed model), else empty.
