@@ -487,7 +487,7 @@ class CentralDifferenceSolver {
       return;
     }
     if (body_.bonds.numBonds() > 0) {
-      pd::updateNodeFrames(space_, body_, state);
+      updateBondFrames(state);
       if (stepWork_.interiorBonds)
         pd::computeBondForces(space_, options_.forceKernel, *stepWork_.interiorBonds, state, intact_, outputs,
                               pd::NodeFrames::Current);
@@ -514,14 +514,18 @@ class CentralDifferenceSolver {
     }
     assembly::condenseImageForces(space_, actions_.mirrorImages, outputs.forces);
   }
-  // One rank's forces: the bonds' (reading the frames of their own nodes only: a mixed
-  // model's CCM nodes have none), then the shell elements'.
+  // The frames the bonds read: those of the nodes with bonds (a mixed model's CCM nodes have
+  // none).
+  void updateBondFrames(const pd::PdKinematics<MemorySpace>& state) {
+    if (stepWork_.bondedNodes.extent(0) > 0)
+      pd::updateNodeFrames(space_, body_, state, stepWork_.bondedNodes);
+    else
+      pd::updateNodeFrames(space_, body_, state);
+  }
+  // One rank's forces: the bonds', then the shell elements'.
   void addModelForces(const pd::PdKinematics<MemorySpace>& state, const pd::BondForceOutputs<MemorySpace>& outputs) {
     if (body_.bonds.numBonds() > 0) {
-      if (stepWork_.bondedNodes.extent(0) > 0)
-        pd::updateNodeFrames(space_, body_, state, stepWork_.bondedNodes);
-      else
-        pd::updateNodeFrames(space_, body_, state);
+      updateBondFrames(state);
       pd::computeBondForces(space_, options_.forceKernel, body_, state, intact_, outputs, pd::NodeFrames::Current);
     }
     if (shell_)
@@ -1107,7 +1111,7 @@ class CentralDifferenceSolver {
   // bondedNodes is set.
   using ElementSelection = shell::ElementSelection<MemorySpace>;
   struct StepWork {
-    // One rank: the nodes with bonds where some have none (a mixed model), else empty.
+    // The nodes with bonds where some have none (a mixed model), else empty.
     Kokkos::View<const LocalIndex*, MemorySpace> bondedNodes;
     std::optional<pd::PdBody<MemorySpace>> interiorBonds, boundaryBonds;
     std::optional<shell::ShellBody<MemorySpace>> shell;
@@ -1115,17 +1119,16 @@ class CentralDifferenceSolver {
   };
   StepWork stepWorkOf(const pd::PdBody<MemorySpace>& body,
                       const std::optional<shell::ShellBody<MemorySpace>>& shell) const {
-    if (!distribution_.distributed()) {
-      StepWork work;
-      if (body.bonds.numBonds() == 0) return work;
+    StepWork work;
+    if (body.bonds.numBonds() > 0) {
       const auto offsets = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, body.bonds.offsets);
       std::vector<LocalIndex> bonded;
       for (LocalIndex node = 0; node < body.numNodes(); ++node)
         if (offsets(node + 1) > offsets(node)) bonded.push_back(node);
-      if (!bonded.empty() && bonded.size() < static_cast<std::size_t>(body.numNodes()))
+      if (bonded.size() < static_cast<std::size_t>(body.numNodes()))
         work.bondedNodes = viewOf<MemorySpace>(bonded, "nodes with bonds");
-      return work;
     }
+    if (!distribution_.distributed()) return work;
     const auto owned = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, distribution_.owned());
     const auto slots = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, distribution_.ownerSlots());
     const auto images = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace{}, actions_.mirrorImages.nodes);
@@ -1138,7 +1141,6 @@ class CentralDifferenceSolver {
     for (LocalIndex node = 0; node < numNodes; ++node) read(node) = owned(node);
     for (std::size_t k = 0; k < images.extent(0); ++k)
       if (owned(masters(k))) read(images(k)) = 1;
-    StepWork work;
     if (shell) {
       const Kokkos::View<const std::uint8_t*, MemorySpace> readMask =
           Kokkos::create_mirror_view_and_copy(MemorySpace{}, read);
